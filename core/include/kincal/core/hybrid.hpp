@@ -1,0 +1,295 @@
+// The 6-DOF hybrid robot of seed 000 (Huang et al.): a 3-UPS + UP parallel
+// mechanism in series with a 3R wrist (the UP limb and the wrist form the
+// UPRRR limb 4). IK from tool pose to the six actuated joints, FK, and the
+// Jacobian. The geometry adopted where the paper is silent is documented in
+// docs/hybrid-geometry.md; the frame names follow seed 000 Section 2.
+//
+//   {R0}: base frame at A0 (centre of the UPS base joints), z0 toward the work.
+//   UP limb: U joint at A0 = Rx(θ1)·Ry(θ2) (no spin about the limb axis), the
+//     passive prismatic along w = Rp·z, platform centre A64 = c·w (c = q34 + e).
+//   UPS limb i: U joint at A1i (base), S joint at A6i = A64 + Rp·a_i; the
+//     actuated prismatic length is q_i = |A6i − A1i|.
+//   wrist: F4 = Rp·Rz(θ4) (joint 4 about the limb axis), Q = A64 + d_w·w;
+//     F5 = F4·Rx(θ5) (joint 5 about F4·x through Q), P0 = Q + l_w·F5·z;
+//     F6 = F5·Ry(θ6) (joint 6 about F5·y through P0), P = P0 + l_t·F6·z.
+//   tool frame T = F6·C; poses are given in the workpiece frame {R} of seed 000
+//     Eq. (8): R_user = wR0·T, p_user = wR0·(P − o), o = workpiece origin in {R0}.
+//
+// Joint vector q = (q1, q2, q3, θ4, θ5, θ6) as commanded; the physical joint
+// is q + joint_offset (seed 000's encoder offsets Δξ: Δq_i and Δθ_j).
+#pragma once
+
+#include "kincal/core/pose.hpp"
+#include "kincal/core/status.hpp"
+#include "kincal/core/stewart.hpp"  // FkReport, FkOptions
+
+namespace kincal {
+
+template <class Scalar> struct HybridPassive {
+  Scalar theta1 = Scalar(0);  // U joint at A0, about x0
+  Scalar theta2 = Scalar(0);  // U joint at A0, about Rx(θ1)·y0
+  Scalar extension = Scalar(0);  // c = |A0 A64|, mm
+};
+
+template <class Scalar> struct HybridGeometry {
+  Mat3<Scalar> base_joints = Mat3<Scalar>::Zero();      // A1i in {R0}, columns, mm
+  Mat3<Scalar> platform_joints = Mat3<Scalar>::Zero();  // a_i = A6i − A64 in the platform frame, mm
+  Scalar platform_to_wrist = Scalar(405);  // |A64 Q|
+  Scalar wrist_link = Scalar(120);         // |Q P0|
+  Scalar tool_length = Scalar(250);        // |P0 P|
+  Mat3<Scalar> workpiece_rotation = Mat3<Scalar>::Identity();  // wR0, seed 000 Eq. (8)
+  Vec3<Scalar> workpiece_origin = Vec3<Scalar>::Zero();        // origin of {R}, in {R0}
+  Mat3<Scalar> tool_offset = Mat3<Scalar>::Identity();         // C
+  Vec6<Scalar> joint_offset = Vec6<Scalar>::Zero();            // physical − commanded
+  Vec6<Scalar> min_joint = Vec6<Scalar>::Constant(Scalar(-1e9));
+  Vec6<Scalar> max_joint = Vec6<Scalar>::Constant(Scalar(1e9));
+  Scalar min_extension = Scalar(0), max_extension = Scalar(1e9);
+  HybridPassive<Scalar> home;  // FK's default starting configuration
+
+  template <class Other> HybridGeometry<Other> cast() const {
+    HybridGeometry<Other> g;
+    g.base_joints = base_joints.template cast<Other>();
+    g.platform_joints = platform_joints.template cast<Other>();
+    g.platform_to_wrist = Other(platform_to_wrist);
+    g.wrist_link = Other(wrist_link);
+    g.tool_length = Other(tool_length);
+    g.workpiece_rotation = workpiece_rotation.template cast<Other>();
+    g.workpiece_origin = workpiece_origin.template cast<Other>();
+    g.tool_offset = tool_offset.template cast<Other>();
+    g.joint_offset = joint_offset.template cast<Other>();
+    g.min_joint = min_joint.template cast<Other>();
+    g.max_joint = max_joint.template cast<Other>();
+    g.min_extension = Other(min_extension);
+    g.max_extension = Other(max_extension);
+    g.home.theta1 = Other(home.theta1);
+    g.home.theta2 = Other(home.theta2);
+    g.home.extension = Other(home.extension);
+    return g;
+  }
+};
+using HybridGeometryd = HybridGeometry<double>;
+using HybridGeometryf = HybridGeometry<float>;
+
+// Every frame and point of the chain at one configuration, in {R0}. The
+// Jacobian and the error models are built from these (seed 000 Eq. (5), (6)).
+template <class Scalar> struct HybridFrames {
+  Mat3<Scalar> Rp;           // platform (UP limb) orientation
+  Vec3<Scalar> w;            // limb axis w_{3,4} = Rp·z
+  Vec3<Scalar> y1;           // second U-joint axis, Rx(θ1)·y0
+  Scalar extension;          // c
+  Eigen::Matrix<Scalar, 3, 3> platform_joints;  // A6i in {R0}
+  Eigen::Matrix<Scalar, 3, 3> legs;             // A6i − A1i
+  Mat3<Scalar> F4, F5, F6;   // wrist joint frames
+  Vec3<Scalar> Q, P0, P;     // wrist points and tool point
+};
+
+template <class Scalar>
+HybridFrames<Scalar> hybrid_frames(const HybridGeometry<Scalar>& g, const HybridPassive<Scalar>& s,
+                                   const Vec3<Scalar>& wrist_angles) {
+  HybridFrames<Scalar> f;
+  const Mat3<Scalar> R1 = rot_x(s.theta1);
+  f.Rp = R1 * rot_y(s.theta2);
+  f.w = f.Rp.col(2);
+  f.y1 = R1.col(1);
+  f.extension = s.extension;
+  const Vec3<Scalar> a64 = s.extension * f.w;
+  f.platform_joints = f.Rp * g.platform_joints;
+  f.platform_joints.colwise() += a64;
+  f.legs = f.platform_joints - g.base_joints;
+  f.F4 = f.Rp * rot_z(wrist_angles(0));
+  f.F5 = f.F4 * rot_x(wrist_angles(1));
+  f.F6 = f.F5 * rot_y(wrist_angles(2));
+  f.Q = a64 + g.platform_to_wrist * f.w;
+  f.P0 = f.Q + g.wrist_link * f.F5.col(2);
+  f.P = f.P0 + g.tool_length * f.F6.col(2);
+  return f;
+}
+
+// Tool pose in the workpiece frame {R}.
+template <class Scalar> Pose<Scalar> hybrid_tool_pose(const HybridGeometry<Scalar>& g, const HybridFrames<Scalar>& f) {
+  Pose<Scalar> out;
+  out.R = g.workpiece_rotation * f.F6 * g.tool_offset;
+  out.p = g.workpiece_rotation * (f.P - g.workpiece_origin);
+  return out;
+}
+
+// Forward Jacobian: tool twist at P in {R} per unit rate of the six actuated
+// joints. The parallel part follows seed 000 Eq. (5): the UP limb admits the
+// passive rates ṡ = (θ̇1, θ̇2, ċ) (its constraint wrenches remove the rest), and
+// the UPS actuation wrenches give q̇_{1..3} = M·ṡ, M_ij = u_i·(axis_j × A6i) for
+// the U axes and u_i·w for ċ. The wrist columns are its joint screws taken to P
+// (seed 000 Eq. (6)). Returns false if M is singular (a parallel singularity).
+template <class Scalar>
+bool hybrid_forward_jacobian(const HybridGeometry<Scalar>& g, const HybridFrames<Scalar>& f, Mat6<Scalar>& J) {
+  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
+  Mat3<Scalar> M;
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<Scalar> u = f.legs.col(i).normalized();
+    const Vec3<Scalar> x = f.platform_joints.col(i);
+    M(i, 0) = u.dot(ex.cross(x));
+    M(i, 1) = u.dot(f.y1.cross(x));
+    M(i, 2) = u.dot(f.w);
+  }
+  const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
+  if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) return false;
+  // Tool twist per passive rate (K), then per actuated UPS rate (K·M⁻¹).
+  Eigen::Matrix<Scalar, 6, 3> K;
+  K.template block<3, 1>(0, 0) = ex.cross(f.P);
+  K.template block<3, 1>(3, 0) = ex;
+  K.template block<3, 1>(0, 1) = f.y1.cross(f.P);
+  K.template block<3, 1>(3, 1) = f.y1;
+  K.template block<3, 1>(0, 2) = f.w;
+  K.template block<3, 1>(3, 2).setZero();
+  Mat6<Scalar> J0;
+  J0.template leftCols<3>() = K * lu.inverse();
+  const Vec3<Scalar> axes[3] = {f.w, f.F5.col(0), f.F6.col(1)};
+  const Vec3<Scalar> through[3] = {f.Q, f.Q, f.P0};
+  for (int j = 0; j < 3; ++j) {
+    J0.template block<3, 1>(0, 3 + j) = axes[j].cross(f.P - through[j]);
+    J0.template block<3, 1>(3, 3 + j) = axes[j];
+  }
+  // Express in {R}: both halves rotate by wR0 (seed 000 Eq. (8)).
+  J.template topRows<3>() = g.workpiece_rotation * J0.template topRows<3>();
+  J.template bottomRows<3>() = g.workpiece_rotation * J0.template bottomRows<3>();
+  return true;
+}
+
+template <class Scalar> bool hybrid_within_limits(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& q) {
+  return !((q.array() < g.min_joint.array()).any() || (q.array() > g.max_joint.array()).any());
+}
+
+// IK: commanded joints for a tool pose in {R}; closed form. Writes `q` (and
+// `jacobian` = ∂q/∂twist, and `passive`) only on Ok.
+//   InvalidInput  non-finite pose
+//   Unreachable   no assembly reaches this pose (the wrist centre line passes
+//                 through A0, or the limb would point away from the work)
+//   OutOfLimits   a UPS length, wrist angle or the UP extension outside its range
+//   Singular      (only when the Jacobian is requested) parallel or wrist singularity
+template <class Scalar>
+Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6<Scalar>& q,
+                 NonDeducedT<Mat6<Scalar>>* jacobian = nullptr, NonDeducedT<HybridPassive<Scalar>>* passive = nullptr) {
+  if (!tool.finite()) return Status::InvalidInput;
+  const Mat3<Scalar> wR0t = g.workpiece_rotation.transpose();
+  const Mat3<Scalar> F6 = wR0t * tool.R * g.tool_offset.transpose();
+  const Vec3<Scalar> P = g.workpiece_origin + wR0t * tool.p;
+  const Vec3<Scalar> a6 = F6.col(1);  // joint-6 axis, = F5·y
+  const Vec3<Scalar> P0 = P - g.tool_length * F6.col(2);
+  // Q lies on the limb line through A0 and joint 5's axis is normal to that
+  // line, so F5·z (the link Q→P0, normal to a6) is the part of A0→P0 normal to a6.
+  Vec3<Scalar> u = P0 - P0.dot(a6) * a6;
+  const Scalar un = u.norm();
+  if (!(un > Scalar(1e-6) * (Scalar(1) + P0.norm()))) return Status::Unreachable;
+  u /= un;
+  const Vec3<Scalar> Qv = P0 - g.wrist_link * u;
+  const Scalar r = Qv.norm();
+  const Vec3<Scalar> w = Qv / r;
+  if (!(w.z() > Scalar(0))) return Status::Unreachable;
+  HybridPassive<Scalar> s;
+  s.extension = r - g.platform_to_wrist;
+  s.theta2 = std::asin(w.x() > Scalar(1) ? Scalar(1) : (w.x() < Scalar(-1) ? Scalar(-1) : w.x()));
+  s.theta1 = std::atan2(-w.y(), w.z());
+  const Mat3<Scalar> Rp = rot_x(s.theta1) * rot_y(s.theta2);
+  const Vec3<Scalar> x5 = Rp.transpose() * a6.cross(u);  // joint-5 axis in the platform frame
+  Vec3<Scalar> angles;
+  angles(0) = std::atan2(x5.y(), x5.x());
+  const Mat3<Scalar> F4 = Rp * rot_z(angles(0));
+  const Vec3<Scalar> u4 = F4.transpose() * u;
+  angles(1) = std::atan2(-u4.y(), u4.z());
+  const Mat3<Scalar> M6 = (F4 * rot_x(angles(1))).transpose() * F6;
+  angles(2) = std::atan2(M6(0, 2), M6(0, 0));
+
+  const HybridFrames<Scalar> f = hybrid_frames(g, s, angles);
+  Vec6<Scalar> cmd;
+  cmd.template head<3>() = f.legs.colwise().norm().transpose();
+  cmd.template tail<3>() = angles;
+  cmd -= g.joint_offset;
+  if (!all_finite(cmd)) return Status::InvalidInput;
+  if (!hybrid_within_limits(g, cmd) || s.extension < g.min_extension || s.extension > g.max_extension)
+    return Status::OutOfLimits;
+  if (jacobian != nullptr) {
+    Mat6<Scalar> Jf;
+    if (!hybrid_forward_jacobian(g, f, Jf)) return Status::Singular;
+    const Eigen::PartialPivLU<Mat6<Scalar>> lu(Jf);
+    if (is_singular(lu)) return Status::Singular;
+    *jacobian = lu.inverse();
+  }
+  if (passive != nullptr) *passive = s;
+  q = cmd;
+  return Status::Ok;
+}
+
+// FK: tool pose for commanded joints. The wrist is serial, so only the
+// parallel part needs Newton's method: solve |A6i(s) − A1i| = q_i + Δq_i for
+// the passive s = (θ1, θ2, c) with the 3×3 Jacobian M above, starting from
+// `guess` (the last configuration in a controller, `home` otherwise).
+// Writes `tool` (and `passive`) only on Ok.
+template <class Scalar>
+FkReport<Scalar> hybrid_fk(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& q, const HybridPassive<Scalar>& guess,
+                           Pose<Scalar>& tool, NonDeducedT<HybridPassive<Scalar>>* passive = nullptr,
+                           const NonDeducedT<FkOptions<Scalar>>& options = FkOptions<Scalar>()) {
+  FkReport<Scalar> report;
+  if (!all_finite(q) || !is_finite(guess.theta1) || !is_finite(guess.theta2) || !is_finite(guess.extension)) {
+    report.status = Status::InvalidInput;
+    return report;
+  }
+  if (!hybrid_within_limits(g, q)) {
+    report.status = Status::OutOfLimits;
+    return report;
+  }
+  const Vec6<Scalar> physical = q + g.joint_offset;
+  const Vec3<Scalar> target = physical.template head<3>();
+  const Vec3<Scalar> wrist = physical.template tail<3>();
+  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
+  HybridPassive<Scalar> s = guess;
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    const Mat3<Scalar> R1 = rot_x(s.theta1);
+    const Mat3<Scalar> Rp = R1 * rot_y(s.theta2);
+    const Vec3<Scalar> w = Rp.col(2), y1 = R1.col(1);
+    Mat3<Scalar> M;
+    Vec3<Scalar> residual;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3<Scalar> x = s.extension * w + Rp * g.platform_joints.col(i);
+      const Vec3<Scalar> leg = x - g.base_joints.col(i);
+      const Scalar len = leg.norm();
+      const Vec3<Scalar> u = leg / len;
+      residual(i) = len - target(i);
+      M(i, 0) = u.dot(ex.cross(x));
+      M(i, 1) = u.dot(y1.cross(x));
+      M(i, 2) = u.dot(w);
+    }
+    report.iterations = it;
+    const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
+    if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) {
+      report.status = Status::Singular;
+      return report;
+    }
+    const Vec3<Scalar> step = -lu.solve(residual);
+    if (!all_finite(step)) break;
+    s.theta1 += step(0);
+    s.theta2 += step(1);
+    s.extension += step(2);
+    // Step size in mm at the platform: angles scaled by the limb length.
+    report.last_step = std::abs(step(2)) + std::abs(s.extension) * (std::abs(step(0)) + std::abs(step(1)));
+    if (report.last_step < options.step_tolerance) {
+      const Pose<Scalar> out = hybrid_tool_pose(g, hybrid_frames(g, s, wrist));
+      if (!out.finite()) break;
+      if (s.extension < g.min_extension || s.extension > g.max_extension) {
+        report.status = Status::OutOfLimits;
+        return report;
+      }
+      tool = out;
+      if (passive != nullptr) *passive = s;
+      report.status = Status::Ok;
+      return report;
+    }
+  }
+  report.status = Status::NotConverged;
+  return report;
+}
+
+template <class Scalar>
+FkReport<Scalar> hybrid_fk(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& q, Pose<Scalar>& tool) {
+  return hybrid_fk(g, q, g.home, tool);
+}
+
+}  // namespace kincal

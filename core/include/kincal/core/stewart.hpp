@@ -1,0 +1,165 @@
+// 6-UPS Stewart platform (seed 001): inverse kinematics, its Jacobian, and
+// forward kinematics by Newton's method.
+//
+// Model (seed 001 Eq. (1)): leg i joins the base hinge B_i (base frame) to the
+// platform hinge P_i (platform frame); with platform pose (R, OP)
+//   l_i = |R·P_i + OP − B_i|.
+// The actuator reports q_i; the physical leg is l_i = q_i + length_offset_i,
+// which is how seed 001's dl_i (Table 3) enters: a zero / encoder offset of the
+// leg length. Nominal machines have length_offset = 0.
+#pragma once
+
+#include "kincal/core/pose.hpp"
+#include "kincal/core/status.hpp"
+
+namespace kincal {
+
+template <class Scalar> struct StewartGeometry {
+  Eigen::Matrix<Scalar, 3, 6> base;      // B_i, base frame, mm
+  Eigen::Matrix<Scalar, 3, 6> platform;  // P_i, platform frame, mm
+  Vec6<Scalar> length_offset = Vec6<Scalar>::Zero();  // l_i − q_i, mm
+  Vec6<Scalar> min_length = Vec6<Scalar>::Constant(Scalar(0));  // actuator stroke on q, mm
+  Vec6<Scalar> max_length = Vec6<Scalar>::Constant(Scalar(1e9));
+  Pose<Scalar> home;  // FK's default starting pose
+
+  template <class Other> StewartGeometry<Other> cast() const {
+    StewartGeometry<Other> g;
+    g.base = base.template cast<Other>();
+    g.platform = platform.template cast<Other>();
+    g.length_offset = length_offset.template cast<Other>();
+    g.min_length = min_length.template cast<Other>();
+    g.max_length = max_length.template cast<Other>();
+    g.home = home.template cast<Other>();
+    return g;
+  }
+};
+using StewartGeometryd = StewartGeometry<double>;
+using StewartGeometryf = StewartGeometry<float>;
+
+// Leg vectors L_i = R·P_i + OP − B_i (columns). No checks: a building block.
+template <class Scalar>
+Eigen::Matrix<Scalar, 3, 6> stewart_leg_vectors(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose) {
+  Eigen::Matrix<Scalar, 3, 6> legs = pose.R * g.platform;
+  legs.colwise() += pose.p;
+  legs -= g.base;
+  return legs;
+}
+
+// Inverse-kinematics Jacobian J = ∂q/∂twist (6×6): row i is
+// [u_iᵀ, ((R·P_i) × u_i)ᵀ] with u_i the unit leg vector — the actuation wrench
+// of leg i (seed 000 Eq. (3) for a UPS limb).
+template <class Scalar>
+Mat6<Scalar> stewart_jacobian_from_legs(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose,
+                                        const Eigen::Matrix<Scalar, 3, 6>& legs) {
+  Mat6<Scalar> J;
+  for (int i = 0; i < 6; ++i) {
+    const Vec3<Scalar> u = legs.col(i).normalized();
+    const Vec3<Scalar> arm = pose.R * g.platform.col(i);
+    J.template block<1, 3>(i, 0) = u.transpose();
+    J.template block<1, 3>(i, 3) = arm.cross(u).transpose();
+  }
+  return J;
+}
+
+// Reciprocal condition of a 6×6 matrix in the 1-norm, from an LU that the
+// caller already has; fixed-size LU does not allocate.
+template <class Scalar> bool is_singular(const Eigen::PartialPivLU<Mat6<Scalar>>& lu) {
+  const Scalar rc = lu.rcond();
+  return !(rc > Tolerance<Scalar>::singular_rcond);  // also true for NaN
+}
+
+// IK: actuator commands q for a platform pose. Writes `q` (and `jacobian`, if
+// given, = ∂q/∂twist) only on Ok.
+//   InvalidInput  non-finite pose
+//   Unreachable   a platform hinge on or below its base hinge's plane
+//                 (legs would have to pass through the base: not this assembly mode)
+//   OutOfLimits   a command outside [min_length, max_length]
+//   Singular      (only when the Jacobian is requested) J is singular here
+template <class Scalar>
+Status stewart_ik(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose, Vec6<Scalar>& q,
+                  NonDeducedT<Mat6<Scalar>>* jacobian = nullptr) {
+  if (!pose.finite()) return Status::InvalidInput;
+  const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, pose);
+  Vec6<Scalar> cmd;
+  for (int i = 0; i < 6; ++i) {
+    if (!(legs(2, i) > Scalar(0))) return Status::Unreachable;
+    cmd(i) = legs.col(i).norm() - g.length_offset(i);
+  }
+  if (!all_finite(cmd)) return Status::InvalidInput;
+  if ((cmd.array() < g.min_length.array()).any() || (cmd.array() > g.max_length.array()).any())
+    return Status::OutOfLimits;
+  if (jacobian != nullptr) {
+    const Mat6<Scalar> J = stewart_jacobian_from_legs(g, pose, legs);
+    const Eigen::PartialPivLU<Mat6<Scalar>> lu(J);
+    if (is_singular(lu)) return Status::Singular;
+    *jacobian = J;
+  }
+  q = cmd;
+  return Status::Ok;
+}
+
+// FK diagnostics, exposed like LinuxCNC's iteration counters.
+template <class Scalar> struct FkReport {
+  Status status = Status::NotConverged;
+  int iterations = 0;
+  Scalar last_step = Scalar(0);  // norm of the last Newton step (mm ⊕ rad)
+};
+
+template <class Scalar> struct FkOptions {
+  int max_iterations = Tolerance<Scalar>::fk_max_iterations;
+  Scalar step_tolerance = Tolerance<Scalar>::fk_step;
+};
+
+// FK: platform pose for actuator commands q, by Newton's method on
+// l(pose) − (q + offset) = 0 with the analytic Jacobian above; each step is a
+// twist applied with apply_twist, so the iteration stays on SE(3). Starts from
+// `guess` (the last pose in a controller, `home` otherwise). Writes `pose` only
+// on Ok. Status: InvalidInput (non-finite q or guess), OutOfLimits (q outside
+// the stroke), Singular (J singular on the way), NotConverged.
+template <class Scalar>
+FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>& q, const Pose<Scalar>& guess,
+                            Pose<Scalar>& pose, const NonDeducedT<FkOptions<Scalar>>& options = FkOptions<Scalar>()) {
+  FkReport<Scalar> report;
+  if (!all_finite(q) || !guess.finite()) {
+    report.status = Status::InvalidInput;
+    return report;
+  }
+  if ((q.array() < g.min_length.array()).any() || (q.array() > g.max_length.array()).any()) {
+    report.status = Status::OutOfLimits;
+    return report;
+  }
+  const Vec6<Scalar> target = q + g.length_offset;
+  Pose<Scalar> x = guess;
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, x);
+    const Vec6<Scalar> residual = legs.colwise().norm().transpose() - target;
+    const Eigen::PartialPivLU<Mat6<Scalar>> lu(stewart_jacobian_from_legs(g, x, legs));
+    report.iterations = it;
+    if (is_singular(lu)) {
+      report.status = Status::Singular;
+      return report;
+    }
+    const Twist<Scalar> step = -lu.solve(residual);
+    report.last_step = step.norm();
+    if (!all_finite(step)) {
+      report.status = Status::NotConverged;
+      return report;
+    }
+    x = apply_twist(x, step);
+    if (report.last_step < options.step_tolerance) {
+      if (!x.finite()) break;
+      pose = x;
+      report.status = Status::Ok;
+      return report;
+    }
+  }
+  report.status = Status::NotConverged;
+  return report;
+}
+
+template <class Scalar>
+FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>& q, Pose<Scalar>& pose) {
+  return stewart_fk(g, q, g.home, pose);
+}
+
+}  // namespace kincal
