@@ -25,14 +25,19 @@ find_program(CMAKE_SIZE ${KINCAL_ARM_TRIPLE}-size REQUIRED)
 # -Os is the default optimisation: the firmware bars (flash/RAM/stack) are stated at -Os.
 # A build type adds its own flags after these (e.g. Release's -O3 wins over -Os).
 # Sections per function/object let --gc-sections drop everything unreferenced.
-set(_kincal_common_flags "${KINCAL_ARM_CPU_FLAGS} -Os -ffunction-sections -fdata-sections")
+# newlib-nano (--specs=nano.specs) is smaller and is what bare-metal parts ship;
+# it must be given to compile and link alike (it selects newlib-nano's headers and
+# libraries).
+set(_kincal_common_flags "${KINCAL_ARM_CPU_FLAGS} --specs=nano.specs -Os -ffunction-sections -fdata-sections")
 set(CMAKE_C_FLAGS_INIT   "${_kincal_common_flags}")
 set(CMAKE_ASM_FLAGS_INIT "${KINCAL_ARM_CPU_FLAGS}")
 # core/ uses no exceptions/RTTI; function-local statics need no guard (single thread,
 # and the guards would pull in __cxa_guard_*); static destructors never run on a
 # controller, -fno-use-cxa-atexit avoids __cxa_atexit/__dso_handle.
 set(CMAKE_CXX_FLAGS_INIT "${_kincal_common_flags} -fno-exceptions -fno-rtti -fno-threadsafe-statics -fno-use-cxa-atexit")
-set(CMAKE_EXE_LINKER_FLAGS_INIT "${KINCAL_ARM_CPU_FLAGS} -Wl,--gc-sections")
+# CMake's link line repeats the compile flags (so -mcpu/--specs reach the link too:
+# giving --specs twice is an error in GCC 12).
+set(CMAKE_EXE_LINKER_FLAGS_INIT "-Wl,--gc-sections")
 
 # Libraries and headers for the target come from the cross toolchain only; programs
 # (qemu, size) from the host.  Packages: both, because Eigen is header-only and its

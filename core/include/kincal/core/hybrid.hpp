@@ -45,6 +45,8 @@ template <class Scalar> struct HybridGeometry {
   Vec6<Scalar> max_joint = Vec6<Scalar>::Constant(Scalar(1e9));
   Scalar min_extension = Scalar(0), max_extension = Scalar(1e9);
   HybridPassive<Scalar> home;  // FK's default starting configuration
+  // Radians → millimetres for singularity tests (about the base-to-tool size).
+  Scalar characteristic_length = Scalar(1000);
 
   template <class Other> HybridGeometry<Other> cast() const {
     HybridGeometry<Other> g;
@@ -64,6 +66,7 @@ template <class Scalar> struct HybridGeometry {
     g.home.theta1 = Other(home.theta1);
     g.home.theta2 = Other(home.theta2);
     g.home.extension = Other(home.extension);
+    g.characteristic_length = Other(characteristic_length);
     return g;
   }
 };
@@ -130,8 +133,16 @@ bool hybrid_forward_jacobian(const HybridGeometry<Scalar>& g, const HybridFrames
     M(i, 1) = u.dot(f.y1.cross(x));
     M(i, 2) = u.dot(f.w);
   }
+  const Scalar L = g.characteristic_length;
+  M.template leftCols<2>() /= L;  // angle columns in mm per (mm of arc): dimensionless
   const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
   if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) return false;
+  // Column-wise solves: Eigen's matrix-RHS triangular solve carries a blocking
+  // workspace that references the heap (the firmware link proves it), the
+  // vector solve does not.
+  Mat3<Scalar> Minv;
+  for (int j = 0; j < 3; ++j) Minv.col(j) = lu.solve(Vec3<Scalar>(Vec3<Scalar>::Unit(j)));
+  Minv.template topRows<2>() /= L;
   // Tool twist per passive rate (K), then per actuated UPS rate (K·M⁻¹).
   Eigen::Matrix<Scalar, 6, 3> K;
   K.template block<3, 1>(0, 0) = ex.cross(f.P);
@@ -141,7 +152,7 @@ bool hybrid_forward_jacobian(const HybridGeometry<Scalar>& g, const HybridFrames
   K.template block<3, 1>(0, 2) = f.w;
   K.template block<3, 1>(3, 2).setZero();
   Mat6<Scalar> J0;
-  J0.template leftCols<3>() = K * lu.inverse();
+  J0.template leftCols<3>() = K * Minv;
   const Vec3<Scalar> axes[3] = {f.w, f.F5.col(0), f.F6.col(1)};
   const Vec3<Scalar> through[3] = {f.Q, f.Q, f.P0};
   for (int j = 0; j < 3; ++j) {
@@ -161,10 +172,12 @@ template <class Scalar> bool hybrid_within_limits(const HybridGeometry<Scalar>& 
 // IK: commanded joints for a tool pose in {R}; closed form. Writes `q` (and
 // `jacobian` = ∂q/∂twist, and `passive`) only on Ok.
 //   InvalidInput  non-finite pose
-//   Unreachable   no assembly reaches this pose (the wrist centre line passes
-//                 through A0, or the limb would point away from the work)
+//   Unreachable   no assembly reaches this pose (the wrist centre P0 within
+//                 |QP0| of A0, or the limb would point away from the work)
 //   OutOfLimits   a UPS length, wrist angle or the UP extension outside its range
-//   Singular      (only when the Jacobian is requested) parallel or wrist singularity
+//   Singular      joint 6's axis passes through A0 (the IK has a continuum of
+//                 solutions), or, when the Jacobian is requested, a parallel or
+//                 wrist singularity (J_f rank-deficient)
 template <class Scalar>
 Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6<Scalar>& q,
                  NonDeducedT<Mat6<Scalar>>* jacobian = nullptr, NonDeducedT<HybridPassive<Scalar>>* passive = nullptr) {
@@ -176,9 +189,12 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
   const Vec3<Scalar> P0 = P - g.tool_length * F6.col(2);
   // Q lies on the limb line through A0 and joint 5's axis is normal to that
   // line, so F5·z (the link Q→P0, normal to a6) is the part of A0→P0 normal to a6.
+  // P0 at A0 would need a negative limb extension; P0 on joint 6's axis line
+  // through A0 leaves the limb free to turn about that axis: a singularity.
+  if (!(P0.norm() > g.wrist_link)) return Status::Unreachable;
   Vec3<Scalar> u = P0 - P0.dot(a6) * a6;
   const Scalar un = u.norm();
-  if (!(un > Scalar(1e-6) * (Scalar(1) + P0.norm()))) return Status::Unreachable;
+  if (!(un > Scalar(1e-6) * P0.norm())) return Status::Singular;
   u /= un;
   const Vec3<Scalar> Qv = P0 - g.wrist_link * u;
   const Scalar r = Qv.norm();
@@ -209,9 +225,17 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
   if (jacobian != nullptr) {
     Mat6<Scalar> Jf;
     if (!hybrid_forward_jacobian(g, f, Jf)) return Status::Singular;
+    // Dimensionless J_s = D·J_f·D⁻¹ with D = diag(1,1,1,L,L,L) (angles × L).
+    const Scalar L = g.characteristic_length;
+    Jf.template bottomRows<3>() *= L;
+    Jf.template rightCols<3>() /= L;
     const Eigen::PartialPivLU<Mat6<Scalar>> lu(Jf);
     if (is_singular(lu)) return Status::Singular;
-    *jacobian = lu.inverse();
+    Mat6<Scalar> inv;  // = D·J_f⁻¹·D⁻¹, column-wise (see hybrid_forward_jacobian)
+    for (int j = 0; j < 6; ++j) inv.col(j) = lu.solve(Vec6<Scalar>(Vec6<Scalar>::Unit(j)));
+    inv.template bottomRows<3>() /= L;
+    inv.template rightCols<3>() *= L;
+    *jacobian = inv;
   }
   if (passive != nullptr) *passive = s;
   q = cmd;
@@ -258,12 +282,14 @@ FkReport<Scalar> hybrid_fk(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& 
       M(i, 2) = u.dot(w);
     }
     report.iterations = it;
+    M.template leftCols<2>() /= g.characteristic_length;  // dimensionless, as in the Jacobian
     const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
     if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) {
       report.status = Status::Singular;
       return report;
     }
-    const Vec3<Scalar> step = -lu.solve(residual);
+    Vec3<Scalar> step = -lu.solve(residual);
+    step.template head<2>() /= g.characteristic_length;
     if (!all_finite(step)) break;
     s.theta1 += step(0);
     s.theta2 += step(1);

@@ -37,8 +37,9 @@ template <> struct Tolerance<double> {
 };
 
 template <> struct Tolerance<float> {
-  // float has ~7 digits: on a 1000 mm machine the achievable step is ~1e-4 mm.
-  static constexpr float fk_step = 2e-4f;
+  // float has ~7 digits: on a ~1000 mm machine rounding alone moves a Newton
+  // step by ~1e-4 mm, so the stopping step is 1 µm.
+  static constexpr float fk_step = 1e-3f;
   static constexpr float singular_rcond = 1e-5f;
   static constexpr int fk_max_iterations = 20;
 };

@@ -21,6 +21,10 @@ template <class Scalar> struct StewartGeometry {
   Vec6<Scalar> min_length = Vec6<Scalar>::Constant(Scalar(0));  // actuator stroke on q, mm
   Vec6<Scalar> max_length = Vec6<Scalar>::Constant(Scalar(1e9));
   Pose<Scalar> home;  // FK's default starting pose
+  // Length that turns radians into millimetres when judging how singular a
+  // Jacobian is (about the platform radius): rcond of a mixed-unit matrix is
+  // meaningless without it.
+  Scalar characteristic_length = Scalar(200);
 
   template <class Other> StewartGeometry<Other> cast() const {
     StewartGeometry<Other> g;
@@ -30,6 +34,7 @@ template <class Scalar> struct StewartGeometry {
     g.min_length = min_length.template cast<Other>();
     g.max_length = max_length.template cast<Other>();
     g.home = home.template cast<Other>();
+    g.characteristic_length = Other(characteristic_length);
     return g;
   }
 };
@@ -61,11 +66,16 @@ Mat6<Scalar> stewart_jacobian_from_legs(const StewartGeometry<Scalar>& g, const 
   return J;
 }
 
-// Reciprocal condition of a 6×6 matrix in the 1-norm, from an LU that the
-// caller already has; fixed-size LU does not allocate.
+// Singularity test on a dimensionless Jacobian: the angular columns of
+// J = ∂q/∂twist are scaled by the characteristic length L, so that rcond
+// compares like with like. Fixed-size LU does not allocate.
 template <class Scalar> bool is_singular(const Eigen::PartialPivLU<Mat6<Scalar>>& lu) {
   const Scalar rc = lu.rcond();
   return !(rc > Tolerance<Scalar>::singular_rcond);  // also true for NaN
+}
+template <class Scalar> Mat6<Scalar> scale_angular_columns(Mat6<Scalar> J, Scalar length) {
+  J.template rightCols<3>() /= length;
+  return J;
 }
 
 // IK: actuator commands q for a platform pose. Writes `q` (and `jacobian`, if
@@ -90,7 +100,7 @@ Status stewart_ik(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose, Ve
     return Status::OutOfLimits;
   if (jacobian != nullptr) {
     const Mat6<Scalar> J = stewart_jacobian_from_legs(g, pose, legs);
-    const Eigen::PartialPivLU<Mat6<Scalar>> lu(J);
+    const Eigen::PartialPivLU<Mat6<Scalar>> lu(scale_angular_columns(J, g.characteristic_length));
     if (is_singular(lu)) return Status::Singular;
     *jacobian = J;
   }
@@ -133,13 +143,17 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
   for (int it = 1; it <= options.max_iterations; ++it) {
     const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, x);
     const Vec6<Scalar> residual = legs.colwise().norm().transpose() - target;
-    const Eigen::PartialPivLU<Mat6<Scalar>> lu(stewart_jacobian_from_legs(g, x, legs));
+    // Solve in scaled unknowns (angles × L) so the singularity test is
+    // dimensionless, then scale back.
+    const Eigen::PartialPivLU<Mat6<Scalar>> lu(
+        scale_angular_columns(stewart_jacobian_from_legs(g, x, legs), g.characteristic_length));
     report.iterations = it;
     if (is_singular(lu)) {
       report.status = Status::Singular;
       return report;
     }
-    const Twist<Scalar> step = -lu.solve(residual);
+    Twist<Scalar> step = -lu.solve(residual);
+    step.template tail<3>() /= g.characteristic_length;
     report.last_step = step.norm();
     if (!all_finite(step)) {
       report.status = Status::NotConverged;

@@ -1,0 +1,330 @@
+// The core checks that run both on the host (GoogleTest) and on the Cortex-M
+// target under qemu: pose math, IK/FK round trips over each reference
+// machine's workspace, analytic Jacobians against finite differences, and one
+// status per failure. Allocation-free and exception-free like core/ itself.
+#pragma once
+
+#include "kincal/core/reference_machines.hpp"
+#include "portable/check.hpp"
+
+#include <limits>
+
+namespace kincal::test {
+
+// Round-trip tolerances per scalar: float carries ~7 digits on a ~1 m machine.
+template <class Scalar> struct RoundTripTolerance;
+// (Measured worst cases over 10^4 poses: double 1e-13 mm / 6e-16 rad on the
+// 6-UPS, 2e-12 mm on the hybrid; float 6e-5 mm / 3e-7 rad and 1e-3 mm.)
+template <> struct RoundTripTolerance<double> {
+  static constexpr double position_mm = 1e-10, angle_rad = 1e-12;
+};
+template <> struct RoundTripTolerance<float> {
+  static constexpr double position_mm = 2e-4, angle_rad = 2e-6;
+};
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+template <class Scalar> Pose<Scalar> random_pose(Random& rng, const double lo[6], const double hi[6]) {
+  return Pose<Scalar>::from_xyz_rpy(Scalar(rng.uniform(lo[0], hi[0])), Scalar(rng.uniform(lo[1], hi[1])),
+                                    Scalar(rng.uniform(lo[2], hi[2])), Scalar(rng.uniform(lo[3], hi[3])),
+                                    Scalar(rng.uniform(lo[4], hi[4])), Scalar(rng.uniform(lo[5], hi[5])));
+}
+
+template <class Scalar> bool poses_close(const Pose<Scalar>& a, const Pose<Scalar>& b, double pos_tol, double ang_tol) {
+  const Twist<Scalar> e = pose_error(a, b);
+  return double(e.template head<3>().norm()) <= pos_tol && double(e.template tail<3>().norm()) <= ang_tol;
+}
+
+// --- pose math -------------------------------------------------------------
+template <class Scalar> void check_pose_math(Checker& c) {
+  Random rng(7);
+  const double tol = sizeof(Scalar) == 8 ? 1e-12 : 2e-6;
+  for (int k = 0; k < 200; ++k) {
+    const Scalar rx = Scalar(rng.uniform(-3.0, 3.0)), ry = Scalar(rng.uniform(-1.5, 1.5)), rz = Scalar(rng.uniform(-3.0, 3.0));
+    const Mat3<Scalar> R = rotation_from_rpy(rx, ry, rz);
+    KINCAL_CHECK(c, double((R * R.transpose() - Mat3<Scalar>::Identity()).norm()) < tol);
+    KINCAL_CHECK(c, double((rpy_from_rotation(R) - Vec3<Scalar>(rx, ry, rz)).norm()) < 10 * tol);
+    const Vec3<Scalar> w(Scalar(rng.uniform(-1, 1)), Scalar(rng.uniform(-1, 1)), Scalar(rng.uniform(-1, 1)));
+    KINCAL_CHECK(c, double((log_so3(exp_so3(w)) - w).norm()) < 10 * tol);
+    const Vec3<Scalar> tiny = w * Scalar(1e-6);
+    KINCAL_CHECK(c, double((log_so3(exp_so3(tiny)) - tiny).norm()) < 1e-3 * double(tiny.norm()) + tol * 1e-3);
+    Twist<Scalar> t;
+    t << Scalar(rng.uniform(-1, 1)), Scalar(rng.uniform(-1, 1)), Scalar(rng.uniform(-1, 1)), w;
+    const Pose<Scalar> p = Pose<Scalar>::from_xyz_rpy(Scalar(1), Scalar(2), Scalar(3), rx, ry, rz);
+    KINCAL_CHECK(c, double((pose_error(apply_twist(p, t), p) - t).norm()) < 10 * tol);
+    // R = Rz·Ry·Rx, checked element-wise against seed 001 Eq. (2) with α=rz, β=ry, γ=rx.
+    const Scalar ca = std::cos(rz), sa = std::sin(rz), cb = std::cos(ry), sb = std::sin(ry), cg = std::cos(rx),
+                 sg = std::sin(rx);
+    KINCAL_CHECK(c, double(std::abs(R(0, 0) - ca * cb)) < tol);
+    KINCAL_CHECK(c, double(std::abs(R(0, 1) - (ca * sb * sg - sa * cg))) < tol);
+    KINCAL_CHECK(c, double(std::abs(R(1, 2) - (sa * sb * cg - ca * sg))) < tol);
+    KINCAL_CHECK(c, double(std::abs(R(2, 0) + sb)) < tol);
+  }
+}
+
+// --- stewart-seed001 ---------------------------------------------------------
+// Workspace used for the round trips: ±20 mm in x, y; 190..225 mm in z; ±5°.
+constexpr double kStewartLo[6] = {-20, -20, 190, -5 * kDeg, -5 * kDeg, -5 * kDeg};
+constexpr double kStewartHi[6] = {20, 20, 225, 5 * kDeg, 5 * kDeg, 5 * kDeg};
+
+template <class Scalar> void check_stewart_round_trip(Checker& c, int count) {
+  const StewartGeometry<Scalar> g = make_stewart_seed001<Scalar>();
+  Random rng(2026);
+  int worst_iterations = 0;
+  for (int k = 0; k < count; ++k) {
+    const Pose<Scalar> pose = random_pose<Scalar>(rng, kStewartLo, kStewartHi);
+    Vec6<Scalar> q;
+    if (!KINCAL_CHECK(c, stewart_ik(g, pose, q) == Status::Ok)) continue;
+    Pose<Scalar> back;
+    const FkReport<Scalar> r = stewart_fk(g, q, back);  // from the home pose
+    if (!KINCAL_CHECK(c, r.status == Status::Ok)) continue;
+    worst_iterations = r.iterations > worst_iterations ? r.iterations : worst_iterations;
+    KINCAL_CHECK(c, poses_close(back, pose, RoundTripTolerance<Scalar>::position_mm, RoundTripTolerance<Scalar>::angle_rad));
+  }
+  KINCAL_CHECK(c, worst_iterations <= 6);
+}
+
+// ∂q/∂twist against central differences of the IK (in double; the float
+// Jacobian is checked against the double one).
+template <class Scalar> void check_stewart_jacobian(Checker& c) {
+  const StewartGeometry<double> g = make_stewart_seed001<double>();
+  const StewartGeometry<Scalar> gs = g.template cast<Scalar>();
+  Random rng(99);
+  for (int k = 0; k < 50; ++k) {
+    const Pose<double> pose = random_pose<double>(rng, kStewartLo, kStewartHi);
+    Vec6<double> q;
+    Mat6<double> J;
+    if (!KINCAL_CHECK(c, stewart_ik(g, pose, q, &J) == Status::Ok)) continue;
+    const double h = 1e-6;
+    Mat6<double> fd;
+    for (int j = 0; j < 6; ++j) {
+      Twist<double> t = Twist<double>::Zero();
+      t(j) = h;
+      Vec6<double> qp, qm;
+      stewart_ik(g, apply_twist(pose, t), qp);
+      stewart_ik(g, apply_twist(pose, Twist<double>(-t)), qm);
+      fd.col(j) = (qp - qm) / (2 * h);
+    }
+    KINCAL_CHECK(c, (fd - J).norm() < 1e-6 * (1 + J.norm()));
+    Vec6<Scalar> qs;
+    Mat6<Scalar> Js;
+    if (!KINCAL_CHECK(c, stewart_ik(gs, pose.template cast<Scalar>(), qs, &Js) == Status::Ok)) continue;
+    KINCAL_CHECK(c, (Js.template cast<double>() - J).norm() < (sizeof(Scalar) == 8 ? 1e-12 : 1e-3) * (1 + J.norm()));
+  }
+}
+
+// A pose where the 6-UPS Jacobian is singular: rotate about z at the home
+// height until det(J) changes sign, then bisect (the classic torsional
+// singularity of a hexapod). Returns the yaw angle, or 0 if none was found.
+inline double find_stewart_singular_yaw() {
+  const StewartGeometry<double> g = make_stewart_seed001<double>();
+  auto det_at = [&](double yaw) {
+    const Pose<double> p = Pose<double>::from_xyz_rpy(0, 0, 200, 0, 0, yaw);
+    return stewart_jacobian_from_legs(g, p, stewart_leg_vectors(g, p)).determinant();
+  };
+  double lo = 0, dlo = det_at(0);
+  for (double yaw = 0.01; yaw < 3.1; yaw += 0.01) {
+    const double d = det_at(yaw);
+    if ((d > 0) != (dlo > 0)) {
+      double hi = yaw;
+      for (int i = 0; i < 80; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if ((det_at(mid) > 0) == (dlo > 0)) lo = mid; else hi = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    lo = yaw;
+    dlo = d;
+  }
+  return 0;
+}
+
+template <class Scalar> void check_stewart_statuses(Checker& c) {
+  StewartGeometry<Scalar> g = make_stewart_seed001<Scalar>();
+  const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+  const Scalar inf = std::numeric_limits<Scalar>::infinity();
+  Vec6<Scalar> q = Vec6<Scalar>::Constant(Scalar(-7));  // sentinel: must stay untouched on failure
+  Mat6<Scalar> J = Mat6<Scalar>::Constant(Scalar(-7));
+  auto untouched = [&] { return (q.array() == Scalar(-7)).all() && (J.array() == Scalar(-7)).all(); };
+  using P = Pose<Scalar>;
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(nan, 0, 200, 0, 0, 0), q, &J) == Status::InvalidInput);
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, 200, 0, inf, 0), q, &J) == Status::InvalidInput);
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, 300, 0, 0, 0), q, &J) == Status::OutOfLimits);  // legs too long
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, 120, 0, 0, 0), q, &J) == Status::OutOfLimits);  // legs too short
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, -150, 0, 0, 0), q, &J) == Status::Unreachable);  // below the base
+  KINCAL_CHECK(c, untouched());
+  // Singular: widen the stroke so only the singularity can stop the IK.
+  const double yaw = find_stewart_singular_yaw();
+  KINCAL_CHECK(c, yaw > 0.1);
+  g.min_length.setConstant(Scalar(1));
+  g.max_length.setConstant(Scalar(1000));
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, 200, 0, 0, Scalar(yaw)), q, &J) == Status::Singular);
+  KINCAL_CHECK(c, untouched());
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(0, 0, 200, 0, 0, Scalar(yaw)), q) == Status::Ok);  // no Jacobian asked
+  // FK failures, each with its own status; the output pose stays untouched.
+  g = make_stewart_seed001<Scalar>();
+  P out = P::from_xyz_rpy(-7, -7, -7, 0, 0, 0);
+  const Vec3<Scalar> sentinel = out.p;
+  Vec6<Scalar> good;
+  KINCAL_CHECK(c, stewart_ik(g, P::from_xyz_rpy(10, 5, 205, Scalar(2 * kDeg), Scalar(1.5 * kDeg), Scalar(-3 * kDeg)), good) == Status::Ok);
+  Vec6<Scalar> bad = good;
+  bad(3) = nan;
+  KINCAL_CHECK(c, stewart_fk(g, bad, out).status == Status::InvalidInput);
+  bad = good;
+  bad(0) = Scalar(500);
+  KINCAL_CHECK(c, stewart_fk(g, bad, out).status == Status::OutOfLimits);
+  FkOptions<Scalar> one_step;
+  one_step.max_iterations = 1;
+  const FkReport<Scalar> r1 = stewart_fk(g, good, g.home, out, one_step);
+  KINCAL_CHECK(c, r1.status == Status::NotConverged && r1.iterations == 1);
+  KINCAL_CHECK(c, out.p == sentinel);
+  // GUIDE bar: from home to (10, 5, 205, 2°, 1.5°, −3°) in ≤ 5 iterations.
+  const FkReport<Scalar> r = stewart_fk(g, good, out);
+  KINCAL_CHECK(c, r.status == Status::Ok && r.iterations <= 5);
+}
+
+// --- hybrid-seed000 ----------------------------------------------------------
+// The task cuboid 500 × 500 × 120 mm about the reference pose, with the tool
+// orientation varied by ±5° (beyond the paper's pure translation, to exercise
+// the wrist).
+constexpr double kHybridLo[6] = {-250, -250, -60, -5 * kDeg, -5 * kDeg, -5 * kDeg};
+constexpr double kHybridHi[6] = {250, 250, 60, 5 * kDeg, 5 * kDeg, 5 * kDeg};
+
+template <class Scalar> void check_hybrid_round_trip(Checker& c, int count) {
+  const HybridGeometry<Scalar> g = make_hybrid_seed000<Scalar>();
+  Random rng(1949);
+  for (int k = 0; k < count; ++k) {
+    const Pose<Scalar> pose = random_pose<Scalar>(rng, kHybridLo, kHybridHi);
+    Vec6<Scalar> q;
+    if (!KINCAL_CHECK(c, hybrid_ik(g, pose, q) == Status::Ok)) continue;
+    Pose<Scalar> back;
+    const FkReport<Scalar> r = hybrid_fk(g, q, back);  // from the home configuration
+    if (!KINCAL_CHECK(c, r.status == Status::Ok)) continue;
+    KINCAL_CHECK(c, r.iterations <= 6);
+    // The hybrid is ~1.6 m from base to tool: float tolerance scales with it.
+    const double scale = sizeof(Scalar) == 8 ? 20.0 : 10.0;
+    KINCAL_CHECK(c, poses_close(back, pose, scale * RoundTripTolerance<Scalar>::position_mm,
+                                scale * RoundTripTolerance<Scalar>::angle_rad));
+  }
+  // The reference pose is the task-cuboid centre with z5 ∥ y and z6 ∥ x of {R}.
+  Vec6<Scalar> q;
+  HybridPassive<Scalar> s;
+  KINCAL_CHECK(c, hybrid_ik(g, Pose<Scalar>(), q, nullptr, &s) == Status::Ok);
+  const HybridFrames<Scalar> f = hybrid_frames(g, s, Vec3<Scalar>(q.template tail<3>()));
+  const double tol = sizeof(Scalar) == 8 ? 1e-12 : 1e-5;
+  KINCAL_CHECK(c, double((g.workpiece_rotation * f.F5.col(0) - Vec3<Scalar>::UnitY()).norm()) < tol);
+  KINCAL_CHECK(c, double((g.workpiece_rotation * f.F6.col(1) - Vec3<Scalar>::UnitX()).norm()) < tol);
+  KINCAL_CHECK(c, std::abs(double(q(4)) - 3.14159265358979323846 / 6) < tol);  // θ5 = β turns the tool vertical
+}
+
+template <class Scalar> void check_hybrid_jacobian(Checker& c) {
+  const HybridGeometry<double> g = make_hybrid_seed000<double>();
+  const HybridGeometry<Scalar> gs = g.template cast<Scalar>();
+  Random rng(4242);
+  for (int k = 0; k < 50; ++k) {
+    const Pose<double> pose = random_pose<double>(rng, kHybridLo, kHybridHi);
+    Vec6<double> q;
+    Mat6<double> J;
+    if (!KINCAL_CHECK(c, hybrid_ik(g, pose, q, &J) == Status::Ok)) continue;
+    const double h = 1e-6;
+    Mat6<double> fd;
+    for (int j = 0; j < 6; ++j) {
+      Twist<double> t = Twist<double>::Zero();
+      t(j) = h;
+      Vec6<double> qp, qm;
+      hybrid_ik(g, apply_twist(pose, t), qp);
+      hybrid_ik(g, apply_twist(pose, Twist<double>(-t)), qm);
+      fd.col(j) = (qp - qm) / (2 * h);
+    }
+    KINCAL_CHECK(c, (fd - J).norm() < 1e-5 * (1 + J.norm()));
+    Vec6<Scalar> qs;
+    Mat6<Scalar> Js;
+    if (!KINCAL_CHECK(c, hybrid_ik(gs, pose.template cast<Scalar>(), qs, &Js) == Status::Ok)) continue;
+    KINCAL_CHECK(c, (Js.template cast<double>() - J).norm() < (sizeof(Scalar) == 8 ? 1e-10 : 2e-2) * (1 + J.norm()));
+  }
+}
+
+// A wrist configuration where the hybrid's forward Jacobian loses rank: scan
+// θ5 at the reference until det changes sign, then bisect. Returns θ5 or 0.
+inline double find_hybrid_singular_theta5() {
+  const HybridGeometry<double> g = make_hybrid_seed000<double>();
+  auto det_at = [&](double t5) {
+    Mat6<double> J;
+    hybrid_forward_jacobian(g, hybrid_frames(g, g.home, Vec3<double>(0, t5, 0)), J);
+    return J.determinant();
+  };
+  double lo = 0, dlo = det_at(0);
+  for (double t5 = 0.01; t5 < 3.1; t5 += 0.01) {
+    const double d = det_at(t5);
+    if ((d > 0) != (dlo > 0)) {
+      double hi = t5;
+      for (int i = 0; i < 80; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if ((det_at(mid) > 0) == (dlo > 0)) lo = mid; else hi = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    lo = t5;
+    dlo = d;
+  }
+  return 0;
+}
+
+template <class Scalar> void check_hybrid_statuses(Checker& c) {
+  HybridGeometry<Scalar> g = make_hybrid_seed000<Scalar>();
+  const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+  Vec6<Scalar> q = Vec6<Scalar>::Constant(Scalar(-7));
+  Mat6<Scalar> J = Mat6<Scalar>::Constant(Scalar(-7));
+  auto untouched = [&] { return (q.array() == Scalar(-7)).all() && (J.array() == Scalar(-7)).all(); };
+  using P = Pose<Scalar>;
+  KINCAL_CHECK(c, hybrid_ik(g, P::from_xyz_rpy(0, nan, 0, 0, 0, 0), q, &J) == Status::InvalidInput);
+  KINCAL_CHECK(c, hybrid_ik(g, P::from_xyz_rpy(0, 0, -400, 0, 0, 0), q, &J) == Status::OutOfLimits);  // UPS too long
+  KINCAL_CHECK(c, hybrid_ik(g, P::from_xyz_rpy(600, 0, 0, 0, 0, 0), q, &J) == Status::OutOfLimits);
+  // Unreachable: a tool pose whose wrist centre P0 sits at A0, so the limb
+  // line is undefined.
+  {
+    const Mat3<Scalar> F6 = g.workpiece_rotation.transpose() * g.tool_offset.transpose();  // orientation 0
+    const Vec3<Scalar> tip = F6.col(2) * g.tool_length;  // P0 = P − l_t·F6·z = A0
+    P pose;
+    pose.p = g.workpiece_rotation * (tip - g.workpiece_origin);
+    KINCAL_CHECK(c, hybrid_ik(g, pose, q, &J) == Status::Unreachable);
+  }
+  KINCAL_CHECK(c, untouched());
+  // Singular: at a wrist angle where det(J_f) changes sign (limits widened so
+  // that only the singularity can stop the IK).
+  const double t5 = find_hybrid_singular_theta5();
+  KINCAL_CHECK(c, t5 > 0.1);
+  g.min_joint.setConstant(Scalar(-1e4));
+  g.max_joint.setConstant(Scalar(1e4));
+  const P singular = hybrid_tool_pose(g, hybrid_frames(g, g.home, Vec3<Scalar>(Scalar(0), Scalar(t5), Scalar(0))));
+  KINCAL_CHECK(c, hybrid_ik(g, singular, q, &J) == Status::Singular);
+  KINCAL_CHECK(c, untouched());
+  // FK failures.
+  g = make_hybrid_seed000<Scalar>();
+  Vec6<Scalar> good;
+  KINCAL_CHECK(c, hybrid_ik(g, P::from_xyz_rpy(100, -50, 20, 0, 0, 0), good) == Status::Ok);
+  P out = P::from_xyz_rpy(-7, -7, -7, 0, 0, 0);
+  Vec6<Scalar> bad = good;
+  bad(4) = nan;
+  KINCAL_CHECK(c, hybrid_fk(g, bad, out).status == Status::InvalidInput);
+  bad = good;
+  bad(1) = Scalar(2000);
+  KINCAL_CHECK(c, hybrid_fk(g, bad, out).status == Status::OutOfLimits);
+  FkOptions<Scalar> one_step;
+  one_step.max_iterations = 1;
+  KINCAL_CHECK(c, hybrid_fk(g, good, g.home, out, nullptr, one_step).status == Status::NotConverged);
+  KINCAL_CHECK(c, out.p == Vec3<Scalar>(Scalar(-7), Scalar(-7), Scalar(-7)));
+}
+
+// Everything for one scalar; `round_trips` poses per machine.
+template <class Scalar> void run_core_checks(Checker& c, int round_trips) {
+  check_pose_math<Scalar>(c);
+  check_stewart_round_trip<Scalar>(c, round_trips);
+  check_stewart_jacobian<Scalar>(c);
+  check_stewart_statuses<Scalar>(c);
+  check_hybrid_round_trip<Scalar>(c, round_trips);
+  check_hybrid_jacobian<Scalar>(c);
+  check_hybrid_statuses<Scalar>(c);
+}
+
+}  // namespace kincal::test
