@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs everything kincal needs on a fresh Debian 12 machine, from Debian's
+# packages only. Safe to run again: it installs only what is missing.
+set -euo pipefail
+
+packages=(
+  cmake ninja-build g++ make                       # host build
+  libeigen3-dev                                    # core/ (and everything)
+  nlohmann-json3-dev libcli11-dev                  # identify/, apps/
+  libgtest-dev libgmock-dev libbenchmark-dev       # tests, benchmarks
+  gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # firmware
+  qemu-system-arm                                  # firmware tests
+  valgrind                                         # instruction counts
+  python3                                          # small helpers in scripts/
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -q
+"${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"

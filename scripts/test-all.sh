@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Sets everything up and runs every test: host (Release), host under
+# AddressSanitizer + UndefinedBehaviorSanitizer, and the firmware core checks
+# under qemu for the Cortex-M7 (double FPU) and the Cortex-M4F (float).
+# Usage: scripts/test-all.sh [host|sanitize|m7|m4f ...]   (default: all four)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+
+jobs=${KINCAL_JOBS:-$(nproc)}
+stages=("$@")
+[ ${#stages[@]} -gt 0 ] || stages=(host sanitize m7 m4f)
+
+run_stage() {
+  local name=$1; shift
+  local dir=build/$name
+  echo "=== $name: configure"
+  cmake -S . -B "$dir" -G Ninja "$@" > "$dir.configure.log" 2>&1 || { cat "$dir.configure.log"; return 1; }
+  echo "=== $name: build"
+  cmake --build "$dir" -j "$jobs"
+  echo "=== $name: test"
+  (cd "$dir" && ctest --output-on-failure -j "$jobs")
+}
+
+mkdir -p build
+for stage in "${stages[@]}"; do
+  case $stage in
+    host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
+    sanitize) run_stage sanitize -DCMAKE_BUILD_TYPE=Debug -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_BENCHMARKS=OFF ;;
+    m7)       run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake ;;
+    m4f)      run_stage m4f -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m4f.cmake ;;
+    *) echo "unknown stage '$stage' (host, sanitize, m7, m4f)" >&2; exit 2 ;;
+  esac
+done
+echo "=== all stages passed: ${stages[*]}"
