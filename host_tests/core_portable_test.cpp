@@ -31,6 +31,8 @@ template void kincal::test::run_core_checks<float>(kincal::test::Checker&, int);
 
 TEST(CorePortable, PoseMathDouble) { expect_suite<double>(&kincal::test::check_pose_math<double>, 1000); }
 TEST(CorePortable, PoseMathFloat) { expect_suite<float>(&kincal::test::check_pose_math<float>, 1000); }
+TEST(CorePortable, SmallLuDouble) { expect_suite<double>(&kincal::test::check_small_lu<double>, 200); }
+TEST(CorePortable, SmallLuFloat) { expect_suite<float>(&kincal::test::check_small_lu<float>, 200); }
 TEST(CorePortable, StewartRoundTripDouble) { expect_suite<double>(&stewart_rt<double>, 2 * kRoundTrips); }
 TEST(CorePortable, StewartRoundTripFloat) { expect_suite<float>(&stewart_rt<float>, 2 * kRoundTrips); }
 TEST(CorePortable, StewartJacobianDouble) { expect_suite<double>(&kincal::test::check_stewart_jacobian<double>, 100); }

@@ -21,6 +21,7 @@
 
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
+#include "kincal/core/small_lu.hpp"
 #include "kincal/core/stewart.hpp"  // FkReport, FkOptions
 
 namespace kincal {
@@ -135,13 +136,9 @@ bool hybrid_forward_jacobian(const HybridGeometry<Scalar>& g, const HybridFrames
   }
   const Scalar L = g.characteristic_length;
   M.template leftCols<2>() /= L;  // angle columns in mm per (mm of arc): dimensionless
-  const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
-  if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) return false;
-  // Column-wise solves: Eigen's matrix-RHS triangular solve carries a blocking
-  // workspace that references the heap (the firmware link proves it), the
-  // vector solve does not.
-  Mat3<Scalar> Minv;
-  for (int j = 0; j < 3; ++j) Minv.col(j) = lu.solve(Vec3<Scalar>(Vec3<Scalar>::Unit(j)));
+  SmallLu<Scalar, 3> lu;
+  if (!factor_regular(lu, M)) return false;
+  Mat3<Scalar> Minv = lu.inverse();
   Minv.template topRows<2>() /= L;
   // Tool twist per passive rate (K), then per actuated UPS rate (K·M⁻¹).
   Eigen::Matrix<Scalar, 6, 3> K;
@@ -196,31 +193,45 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
   const Scalar un = u.norm();
   if (!(un > Scalar(1e-6) * P0.norm())) return Status::Singular;
   u /= un;
-  const Vec3<Scalar> Qv = P0 - g.wrist_link * u;
-  const Scalar r = Qv.norm();
-  const Vec3<Scalar> w = Qv / r;
-  if (!(w.z() > Scalar(0))) return Status::Unreachable;
-  HybridPassive<Scalar> s;
-  s.extension = r - g.platform_to_wrist;
-  s.theta2 = std::asin(w.x() > Scalar(1) ? Scalar(1) : (w.x() < Scalar(-1) ? Scalar(-1) : w.x()));
-  s.theta1 = std::atan2(-w.y(), w.z());
-  const Mat3<Scalar> Rp = rot_x(s.theta1) * rot_y(s.theta2);
-  const Vec3<Scalar> x5 = Rp.transpose() * a6.cross(u);  // joint-5 axis in the platform frame
+  HybridFrames<Scalar> f;
+  f.P = P;
+  f.P0 = P0;
+  f.Q = P0 - g.wrist_link * u;
+  const Scalar r = f.Q.norm();
+  f.w = f.Q / r;
+  if (!(f.w.z() > Scalar(0))) return Status::Unreachable;
+  f.extension = r - g.platform_to_wrist;
+  // Every frame follows from axes already known, without trigonometry:
+  // Rp = Rx(θ1)·Ry(θ2) has third column w, so s2 = w_x, c2 = √(w_y² + w_z²),
+  // s1 = −w_y/c2, c1 = w_z/c2 (c2 > 0 since w_z > 0).
+  const Scalar s2 = f.w.x(), c2 = std::sqrt(f.w.y() * f.w.y() + f.w.z() * f.w.z());
+  const Scalar s1 = -f.w.y() / c2, c1 = f.w.z() / c2;
+  f.Rp << c2, Scalar(0), s2, s1 * s2, c1, -s1 * c2, -c1 * s2, s1, c1 * c2;
+  f.y1 = Vec3<Scalar>(Scalar(0), c1, s1);
+  // F4 = [x5, w × x5, w], F5 = [x5, a6, u] (joint 5's axis x5 = a6 × u), F6 given.
+  const Vec3<Scalar> x5 = a6.cross(u);
+  f.F4.col(0) = x5;
+  f.F4.col(1) = f.w.cross(x5);
+  f.F4.col(2) = f.w;
+  f.F5.col(0) = x5;
+  f.F5.col(1) = a6;
+  f.F5.col(2) = u;
+  f.F6 = F6;
   Vec3<Scalar> angles;
-  angles(0) = std::atan2(x5.y(), x5.x());
-  const Mat3<Scalar> F4 = Rp * rot_z(angles(0));
-  const Vec3<Scalar> u4 = F4.transpose() * u;
-  angles(1) = std::atan2(-u4.y(), u4.z());
-  const Mat3<Scalar> M6 = (F4 * rot_x(angles(1))).transpose() * F6;
-  angles(2) = std::atan2(M6(0, 2), M6(0, 0));
+  angles(0) = std::atan2(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)));  // Rp·Rz(θ4)·x = x5
+  angles(1) = std::atan2(-u.dot(f.F4.col(1)), u.dot(f.w));             // F4·Rx(θ5)·z = u
+  angles(2) = std::atan2(x5.dot(F6.col(2)), x5.dot(F6.col(0)));       // F5·Ry(θ6) = F6
+  const Vec3<Scalar> a64 = f.extension * f.w;
+  f.platform_joints = f.Rp * g.platform_joints;
+  f.platform_joints.colwise() += a64;
+  f.legs = f.platform_joints - g.base_joints;
 
-  const HybridFrames<Scalar> f = hybrid_frames(g, s, angles);
   Vec6<Scalar> cmd;
   cmd.template head<3>() = f.legs.colwise().norm().transpose();
   cmd.template tail<3>() = angles;
   cmd -= g.joint_offset;
   if (!all_finite(cmd)) return Status::InvalidInput;
-  if (!hybrid_within_limits(g, cmd) || s.extension < g.min_extension || s.extension > g.max_extension)
+  if (!hybrid_within_limits(g, cmd) || f.extension < g.min_extension || f.extension > g.max_extension)
     return Status::OutOfLimits;
   if (jacobian != nullptr) {
     Mat6<Scalar> Jf;
@@ -229,15 +240,18 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
     const Scalar L = g.characteristic_length;
     Jf.template bottomRows<3>() *= L;
     Jf.template rightCols<3>() /= L;
-    const Eigen::PartialPivLU<Mat6<Scalar>> lu(Jf);
-    if (is_singular(lu)) return Status::Singular;
-    Mat6<Scalar> inv;  // = D·J_f⁻¹·D⁻¹, column-wise (see hybrid_forward_jacobian)
-    for (int j = 0; j < 6; ++j) inv.col(j) = lu.solve(Vec6<Scalar>(Vec6<Scalar>::Unit(j)));
+    SmallLu<Scalar, 6> lu;
+    if (!factor_regular(lu, Jf)) return Status::Singular;
+    Mat6<Scalar> inv = lu.inverse();  // = D·J_f⁻¹·D⁻¹
     inv.template bottomRows<3>() /= L;
     inv.template rightCols<3>() *= L;
     *jacobian = inv;
   }
-  if (passive != nullptr) *passive = s;
+  if (passive != nullptr) {
+    passive->theta1 = std::atan2(s1, c1);
+    passive->theta2 = std::atan2(s2, c2);
+    passive->extension = f.extension;
+  }
   q = cmd;
   return Status::Ok;
 }
@@ -264,8 +278,9 @@ FkReport<Scalar> hybrid_fk(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& 
   const Vec3<Scalar> target = physical.template head<3>();
   const Vec3<Scalar> wrist = physical.template tail<3>();
   const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
+  const Scalar tolerance = options.relative_residual * target.cwiseAbs().maxCoeff();
   HybridPassive<Scalar> s = guess;
-  for (int it = 1; it <= options.max_iterations; ++it) {
+  for (int it = 0;; ++it) {
     const Mat3<Scalar> R1 = rot_x(s.theta1);
     const Mat3<Scalar> Rp = R1 * rot_y(s.theta2);
     const Vec3<Scalar> w = Rp.col(2), y1 = R1.col(1);
@@ -282,32 +297,31 @@ FkReport<Scalar> hybrid_fk(const HybridGeometry<Scalar>& g, const Vec6<Scalar>& 
       M(i, 2) = u.dot(w);
     }
     report.iterations = it;
-    M.template leftCols<2>() /= g.characteristic_length;  // dimensionless, as in the Jacobian
-    const Eigen::PartialPivLU<Mat3<Scalar>> lu(M);
-    if (!(lu.rcond() > Tolerance<Scalar>::singular_rcond)) {
-      report.status = Status::Singular;
-      return report;
-    }
-    Vec3<Scalar> step = -lu.solve(residual);
-    step.template head<2>() /= g.characteristic_length;
-    if (!all_finite(step)) break;
-    s.theta1 += step(0);
-    s.theta2 += step(1);
-    s.extension += step(2);
-    // Step size in mm at the platform: angles scaled by the limb length.
-    report.last_step = std::abs(step(2)) + std::abs(s.extension) * (std::abs(step(0)) + std::abs(step(1)));
-    if (report.last_step < options.step_tolerance) {
-      const Pose<Scalar> out = hybrid_tool_pose(g, hybrid_frames(g, s, wrist));
-      if (!out.finite()) break;
+    report.residual = residual.cwiseAbs().maxCoeff();
+    if (report.residual < tolerance) {  // also false for NaN
       if (s.extension < g.min_extension || s.extension > g.max_extension) {
         report.status = Status::OutOfLimits;
         return report;
       }
+      const Pose<Scalar> out = hybrid_tool_pose(g, hybrid_frames(g, s, wrist));
+      if (!out.finite()) break;
       tool = out;
       if (passive != nullptr) *passive = s;
       report.status = Status::Ok;
       return report;
     }
+    if (it == options.max_iterations || !(report.residual == report.residual)) break;
+    M.template leftCols<2>() /= g.characteristic_length;  // dimensionless, as in the Jacobian
+    SmallLu<Scalar, 3> lu;
+    if (!factor_regular(lu, M)) {
+      report.status = Status::Singular;
+      return report;
+    }
+    Vec3<Scalar> step = -lu.solve(residual);
+    step.template head<2>() /= g.characteristic_length;
+    s.theta1 += step(0);
+    s.theta2 += step(1);
+    s.extension += step(2);
   }
   report.status = Status::NotConverged;
   return report;

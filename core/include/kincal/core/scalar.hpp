@@ -29,18 +29,20 @@ template <class T> using NonDeducedT = typename NonDeduced<T>::type;
 template <class Scalar> struct Tolerance;
 
 template <> struct Tolerance<double> {
-  // FK stops when the Newton step is below this (mm / rad). GUIDE bar: 1e-9 mm.
-  static constexpr double fk_step = 1e-10;
-  // A Jacobian whose reciprocal condition estimate falls below this is singular.
-  static constexpr double singular_rcond = 1e-9;
+  // FK stops when every joint residual is below fk_residual · |joint| (a few
+  // ulps: the rounding floor). On the reference machines the pose error is
+  // then ~1e-11 mm (GUIDE bar: 1e-9 mm).
+  static constexpr double fk_residual = 1e-13;
+  // A dimensionless Jacobian whose LU pivot ratio (min/max |u_kk|) falls below
+  // this is singular.
+  static constexpr double singular_pivot_ratio = 1e-9;
   static constexpr int fk_max_iterations = 20;
 };
 
 template <> struct Tolerance<float> {
-  // float has ~7 digits: on a ~1000 mm machine rounding alone moves a Newton
-  // step by ~1e-4 mm, so the stopping step is 1 µm.
-  static constexpr float fk_step = 1e-3f;
-  static constexpr float singular_rcond = 1e-5f;
+  // float: 4 ulps of the joint value (~1e-4 mm on a 233 mm leg).
+  static constexpr float fk_residual = 4.8e-7f;
+  static constexpr float singular_pivot_ratio = 1e-5f;
   static constexpr int fk_max_iterations = 20;
 };
 

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "kincal/core/pose.hpp"
+#include "kincal/core/small_lu.hpp"
 #include "kincal/core/status.hpp"
 
 namespace kincal {
@@ -22,8 +23,8 @@ template <class Scalar> struct StewartGeometry {
   Vec6<Scalar> max_length = Vec6<Scalar>::Constant(Scalar(1e9));
   Pose<Scalar> home;  // FK's default starting pose
   // Length that turns radians into millimetres when judging how singular a
-  // Jacobian is (about the platform radius): rcond of a mixed-unit matrix is
-  // meaningless without it.
+  // Jacobian is (about the platform radius): the conditioning of a mixed-unit
+  // matrix is meaningless without it.
   Scalar characteristic_length = Scalar(200);
 
   template <class Other> StewartGeometry<Other> cast() const {
@@ -52,29 +53,30 @@ Eigen::Matrix<Scalar, 3, 6> stewart_leg_vectors(const StewartGeometry<Scalar>& g
 
 // Inverse-kinematics Jacobian J = ∂q/∂twist (6×6): row i is
 // [u_iᵀ, ((R·P_i) × u_i)ᵀ] with u_i the unit leg vector — the actuation wrench
-// of leg i (seed 000 Eq. (3) for a UPS limb).
+// of leg i (seed 000 Eq. (3) for a UPS limb). `arms` are R·P_i, `lengths` |L_i|.
 template <class Scalar>
-Mat6<Scalar> stewart_jacobian_from_legs(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose,
-                                        const Eigen::Matrix<Scalar, 3, 6>& legs) {
+Mat6<Scalar> stewart_jacobian(const Eigen::Matrix<Scalar, 3, 6>& arms, const Eigen::Matrix<Scalar, 3, 6>& legs,
+                              const Vec6<Scalar>& lengths) {
   Mat6<Scalar> J;
   for (int i = 0; i < 6; ++i) {
-    const Vec3<Scalar> u = legs.col(i).normalized();
-    const Vec3<Scalar> arm = pose.R * g.platform.col(i);
+    const Vec3<Scalar> u = legs.col(i) * (Scalar(1) / lengths(i));
     J.template block<1, 3>(i, 0) = u.transpose();
-    J.template block<1, 3>(i, 3) = arm.cross(u).transpose();
+    J.template block<1, 3>(i, 3) = Vec3<Scalar>(arms.col(i)).cross(u).transpose();
   }
   return J;
 }
 
-// Singularity test on a dimensionless Jacobian: the angular columns of
-// J = ∂q/∂twist are scaled by the characteristic length L, so that rcond
-// compares like with like. Fixed-size LU does not allocate.
-template <class Scalar> bool is_singular(const Eigen::PartialPivLU<Mat6<Scalar>>& lu) {
-  const Scalar rc = lu.rcond();
-  return !(rc > Tolerance<Scalar>::singular_rcond);  // also true for NaN
+template <class Scalar>
+Mat6<Scalar> stewart_jacobian(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose) {
+  const Eigen::Matrix<Scalar, 3, 6> arms = pose.R * g.platform;
+  const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, pose);
+  return stewart_jacobian(arms, legs, Vec6<Scalar>(legs.colwise().norm().transpose()));
 }
+
+// Singularity is judged on a dimensionless Jacobian: the angular columns of
+// J = ∂q/∂twist are divided by the characteristic length L.
 template <class Scalar> Mat6<Scalar> scale_angular_columns(Mat6<Scalar> J, Scalar length) {
-  J.template rightCols<3>() /= length;
+  J.template rightCols<3>() *= Scalar(1) / length;
   return J;
 }
 
@@ -89,19 +91,20 @@ template <class Scalar>
 Status stewart_ik(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose, Vec6<Scalar>& q,
                   NonDeducedT<Mat6<Scalar>>* jacobian = nullptr) {
   if (!pose.finite()) return Status::InvalidInput;
-  const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, pose);
-  Vec6<Scalar> cmd;
-  for (int i = 0; i < 6; ++i) {
+  const Eigen::Matrix<Scalar, 3, 6> arms = pose.R * g.platform;
+  Eigen::Matrix<Scalar, 3, 6> legs = arms - g.base;
+  legs.colwise() += pose.p;
+  for (int i = 0; i < 6; ++i)
     if (!(legs(2, i) > Scalar(0))) return Status::Unreachable;
-    cmd(i) = legs.col(i).norm() - g.length_offset(i);
-  }
+  const Vec6<Scalar> lengths = legs.colwise().norm().transpose();
+  const Vec6<Scalar> cmd = lengths - g.length_offset;
   if (!all_finite(cmd)) return Status::InvalidInput;
   if ((cmd.array() < g.min_length.array()).any() || (cmd.array() > g.max_length.array()).any())
     return Status::OutOfLimits;
   if (jacobian != nullptr) {
-    const Mat6<Scalar> J = stewart_jacobian_from_legs(g, pose, legs);
-    const Eigen::PartialPivLU<Mat6<Scalar>> lu(scale_angular_columns(J, g.characteristic_length));
-    if (is_singular(lu)) return Status::Singular;
+    const Mat6<Scalar> J = stewart_jacobian(arms, legs, lengths);
+    SmallLu<Scalar, 6> lu;
+    if (!factor_regular(lu, scale_angular_columns(J, g.characteristic_length))) return Status::Singular;
     *jacobian = J;
   }
   q = cmd;
@@ -111,13 +114,13 @@ Status stewart_ik(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose, Ve
 // FK diagnostics, exposed like LinuxCNC's iteration counters.
 template <class Scalar> struct FkReport {
   Status status = Status::NotConverged;
-  int iterations = 0;
-  Scalar last_step = Scalar(0);  // norm of the last Newton step (mm ⊕ rad)
+  int iterations = 0;            // Newton steps taken
+  Scalar residual = Scalar(0);   // largest joint residual at the end (mm)
 };
 
 template <class Scalar> struct FkOptions {
   int max_iterations = Tolerance<Scalar>::fk_max_iterations;
-  Scalar step_tolerance = Tolerance<Scalar>::fk_step;
+  Scalar relative_residual = Tolerance<Scalar>::fk_residual;  // × the largest joint value
 };
 
 // FK: platform pose for actuator commands q, by Newton's method on
@@ -139,33 +142,32 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
     return report;
   }
   const Vec6<Scalar> target = q + g.length_offset;
+  const Scalar tolerance = options.relative_residual * target.cwiseAbs().maxCoeff();
   Pose<Scalar> x = guess;
-  for (int it = 1; it <= options.max_iterations; ++it) {
-    const Eigen::Matrix<Scalar, 3, 6> legs = stewart_leg_vectors(g, x);
-    const Vec6<Scalar> residual = legs.colwise().norm().transpose() - target;
-    // Solve in scaled unknowns (angles × L) so the singularity test is
-    // dimensionless, then scale back.
-    const Eigen::PartialPivLU<Mat6<Scalar>> lu(
-        scale_angular_columns(stewart_jacobian_from_legs(g, x, legs), g.characteristic_length));
+  for (int it = 0;; ++it) {
+    const Eigen::Matrix<Scalar, 3, 6> arms = x.R * g.platform;
+    Eigen::Matrix<Scalar, 3, 6> legs = arms - g.base;
+    legs.colwise() += x.p;
+    const Vec6<Scalar> lengths = legs.colwise().norm().transpose();
+    const Vec6<Scalar> residual = lengths - target;
     report.iterations = it;
-    if (is_singular(lu)) {
-      report.status = Status::Singular;
-      return report;
-    }
-    Twist<Scalar> step = -lu.solve(residual);
-    step.template tail<3>() /= g.characteristic_length;
-    report.last_step = step.norm();
-    if (!all_finite(step)) {
-      report.status = Status::NotConverged;
-      return report;
-    }
-    x = apply_twist(x, step);
-    if (report.last_step < options.step_tolerance) {
-      if (!x.finite()) break;
+    report.residual = residual.cwiseAbs().maxCoeff();
+    if (report.residual < tolerance) {  // also false for NaN
       pose = x;
       report.status = Status::Ok;
       return report;
     }
+    if (it == options.max_iterations || !(report.residual == report.residual)) break;
+    // Solve in scaled unknowns (angles × L) so the singularity test is
+    // dimensionless, then scale back.
+    SmallLu<Scalar, 6> lu;
+    if (!factor_regular(lu, scale_angular_columns(stewart_jacobian(arms, legs, lengths), g.characteristic_length))) {
+      report.status = Status::Singular;
+      return report;
+    }
+    Twist<Scalar> step = -lu.solve(residual);
+    step.template tail<3>() *= Scalar(1) / g.characteristic_length;
+    x = apply_twist(x, step);
   }
   report.status = Status::NotConverged;
   return report;

@@ -1,0 +1,125 @@
+// LU factorisation with partial pivoting for small fixed-size systems (the
+// 3×3 and 6×6 kinematic Jacobians), written out so the compiler unrolls it.
+// Why not Eigen::PartialPivLU: for a 6×6 its generic blocked code path costs
+// ~1.8k instructions per factorisation plus ~1.3k for rcond(), about 2.5× this
+// (measured with callgrind, docs/benchmarks.md); FK factorises every Newton step
+// and sits on the controller's hot path. The host tests check it against Eigen.
+#pragma once
+
+#include "kincal/core/scalar.hpp"
+
+// Full unrolling of the fixed-size loops (GCC; harmless elsewhere).
+#if defined(__GNUC__) && !defined(__clang__)
+#define KINCAL_UNROLL _Pragma("GCC unroll 8")
+#else
+#define KINCAL_UNROLL
+#endif
+
+namespace kincal {
+
+template <class Scalar, int N> class SmallLu {
+ public:
+  using Matrix = Eigen::Matrix<Scalar, N, N>;
+  using Vector = Eigen::Matrix<Scalar, N, 1>;
+
+  // Factorises A (P·A = L·U) on a plain array: with constant N the compiler
+  // unrolls the loops, which Eigen's row-swap expressions prevent. Returns false
+  // for a non-finite or exactly singular matrix; otherwise pivot_ratio()
+  // measures how close to singular it is.
+  bool factor(const Matrix& A) {
+    KINCAL_UNROLL
+    for (int i = 0; i < N; ++i)
+      KINCAL_UNROLL
+      for (int j = 0; j < N; ++j) a_[i][j] = A(i, j);
+    Scalar max_pivot(0), min_pivot(0);
+    KINCAL_UNROLL
+    for (int k = 0; k < N; ++k) {
+      int p = k;
+      Scalar best = std::abs(a_[k][k]);
+      KINCAL_UNROLL
+      for (int i = k + 1; i < N; ++i) {
+        const Scalar v = std::abs(a_[i][k]);
+        if (v > best) {
+          best = v;
+          p = i;
+        }
+      }
+      perm_[k] = p;
+      if (!(best > Scalar(0))) {  // zero or NaN column
+        ratio_ = Scalar(0);
+        return false;
+      }
+      if (p != k)
+        KINCAL_UNROLL
+        for (int j = 0; j < N; ++j) {
+          const Scalar t = a_[k][j];
+          a_[k][j] = a_[p][j];
+          a_[p][j] = t;
+        }
+      if (k == 0 || best > max_pivot) max_pivot = best;
+      if (k == 0 || best < min_pivot) min_pivot = best;
+      const Scalar inv = Scalar(1) / a_[k][k];
+      inv_pivot_[k] = inv;  // solve() multiplies: a division costs ~10× a multiply
+      KINCAL_UNROLL
+      for (int i = k + 1; i < N; ++i) {
+        const Scalar f = a_[i][k] * inv;
+        a_[i][k] = f;
+        KINCAL_UNROLL
+        for (int j = k + 1; j < N; ++j) a_[i][j] -= f * a_[k][j];
+      }
+    }
+    ratio_ = min_pivot / max_pivot;
+    return ratio_ == ratio_;
+  }
+
+  // min |u_kk| / max |u_kk|: a cheap conditioning measure of a well-scaled
+  // matrix (0 when singular). Callers scale mixed-unit Jacobians first.
+  Scalar pivot_ratio() const { return ratio_; }
+
+  Vector solve(const Vector& b) const {
+    Scalar x[N];
+    KINCAL_UNROLL
+    for (int i = 0; i < N; ++i) x[i] = b(i);
+    KINCAL_UNROLL
+    for (int k = 0; k < N; ++k) {
+      const Scalar t = x[k];
+      x[k] = x[perm_[k]];
+      x[perm_[k]] = t;
+    }
+    KINCAL_UNROLL
+    for (int i = 1; i < N; ++i)
+      KINCAL_UNROLL
+      for (int j = 0; j < i; ++j) x[i] -= a_[i][j] * x[j];
+    KINCAL_UNROLL
+    for (int i = N - 1; i >= 0; --i) {
+      KINCAL_UNROLL
+      for (int j = i + 1; j < N; ++j) x[i] -= a_[i][j] * x[j];
+      x[i] *= inv_pivot_[i];
+    }
+    Vector out;
+    KINCAL_UNROLL
+    for (int i = 0; i < N; ++i) out(i) = x[i];
+    return out;
+  }
+
+  Matrix inverse() const {
+    Matrix inv;
+    KINCAL_UNROLL
+    for (int j = 0; j < N; ++j) inv.col(j) = solve(Vector::Unit(j));
+    return inv;
+  }
+
+ private:
+  Scalar a_[N][N] = {};
+  Scalar inv_pivot_[N] = {};
+  int perm_[N] = {};
+  Scalar ratio_ = Scalar(0);
+};
+
+// The one singularity test of core/: a (dimensionless) Jacobian is singular
+// when its LU fails or its pivot ratio falls below the scalar's threshold.
+template <class Scalar, int N> bool factor_regular(SmallLu<Scalar, N>& lu, const Eigen::Matrix<Scalar, N, N>& A) {
+  return lu.factor(A) && lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio;
+}
+
+}  // namespace kincal
