@@ -1,0 +1,84 @@
+// Robot descriptions: a built-in reference machine by name, or a JSON robot
+// description file (schema: docs/formats.md). A Robot is a value holding one
+// of the core geometries plus the host-side data that core does not need
+// (name, gauge size, screw lead).
+#pragma once
+
+#include <string>
+#include <variant>
+
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/pose.hpp"
+#include "kincal/core/status.hpp"
+#include "kincal/core/stewart.hpp"
+
+namespace kincal::identify {
+
+inline constexpr const char* kStewartFamily = "stewart-6ups";
+inline constexpr const char* kHybridFamily = "hybrid-3ups-up-3r";
+
+// The design inputs of a hybrid machine from which HybridGeometry's derived
+// members (workpiece frame, tool offset, home) follow, exactly as core's
+// make_hybrid_seed000 derives them (reference_machines.hpp).
+struct HybridDesign {
+  Mat3<double> base_joints = Mat3<double>::Zero();      // A1i in {R0}, columns, mm
+  Mat3<double> platform_joints = Mat3<double>::Zero();  // a_i in the platform frame, columns, mm
+  double platform_to_wrist = 0;  // |A64 Q|, mm
+  double wrist_link = 0;         // |Q P0|, mm
+  double tool_length = 0;        // |P0 P|, mm
+  double beta = 0;               // structural angle β, rad
+  double reference_extension = 0;  // c = |A0 A64| at the reference pose, mm
+  Vec6<double> min_joint = Vec6<double>::Zero(), max_joint = Vec6<double>::Zero();
+  double min_extension = 0, max_extension = 0;
+  Vec6<double> joint_offset = Vec6<double>::Zero();
+};
+
+// Builds the geometry: wR0 = Rot(y, π − β)·Rot(z, π/2) (seed 000 Eq. (8)); at
+// the reference configuration (θ1 = θ2 = 0, c = reference_extension,
+// wrist angles (0, β, 0)) the tool point P is the origin of {R} and the tool
+// frame is aligned with {R}.
+HybridGeometry<double> make_hybrid_geometry(const HybridDesign& d);
+// The inverse: reads the design inputs back (β from the workpiece rotation).
+HybridDesign hybrid_design_of(const HybridGeometry<double>& g);
+
+struct Robot {
+  std::string name;
+  std::variant<StewartGeometry<double>, HybridGeometry<double>> geometry;
+  double screw_lead = 5.0;     // mm per revolution, for the `cyclic` effect (GUIDE)
+  double gauge_radius = 0.0;   // |P0 Pj| of the three-target gauge (hybrid only), mm
+
+  bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
+  bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }
+  const StewartGeometry<double>& stewart() const { return std::get<StewartGeometry<double>>(geometry); }
+  StewartGeometry<double>& stewart() { return std::get<StewartGeometry<double>>(geometry); }
+  const HybridGeometry<double>& hybrid() const { return std::get<HybridGeometry<double>>(geometry); }
+  HybridGeometry<double>& hybrid() { return std::get<HybridGeometry<double>>(geometry); }
+
+  const char* family() const { return is_stewart() ? kStewartFamily : kHybridFamily; }
+  static constexpr int joint_count() { return 6; }
+
+  // The pose the machine starts from (stewart: `home`; hybrid: the reference
+  // pose, the origin of the workpiece frame with the tool aligned to it).
+  Pose<double> home_pose() const;
+  // Nominal IK (commanded joints) for a pose, in the robot's pose frame.
+  Status inverse(const Pose<double>& pose, Vec6<double>& q) const;
+};
+
+// Built-in names: "stewart-seed001", "hybrid-seed000". Anything else is read as
+// a robot description file. Throws InputError (with file:line:column for
+// files) on any problem.
+Robot load_robot(const std::string& name_or_path);
+bool is_builtin_robot(const std::string& name);
+Robot builtin_robot(const std::string& name);  // throws InputError if unknown
+
+// Parses a robot description from text; `file` names it in errors.
+Robot parse_robot(const std::string& text, const std::string& file);
+
+// The robot description (JSON text, 2-space indent, trailing newline) that
+// parse_robot reads back to the same geometry.
+std::string robot_to_json(const Robot& robot);
+
+// A few human-readable lines: family, name, dimensions, home pose and its joints.
+std::string robot_summary(const Robot& robot);
+
+}  // namespace kincal::identify

@@ -1,0 +1,44 @@
+// The "actual machine" of `kincal simulate` (docs/simulate.md): joint commands
+// from the nominal model, the pose the erroneous machine really reaches for
+// them (nonlinear FK, no linearisation), then optional measurement noise —
+// the procedure of seed 001 Section 5.2.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+struct SimulateOptions {
+  double noise_mm = 0;   // σ of Gaussian noise on mx, my, mz and on each target coordinate
+  double noise_rad = 0;  // σ of Gaussian noise on mrx, mry, mrz
+  std::uint64_t seed = 1;  // std::mt19937_64 seed; same seed → same noise
+};
+
+struct SimulateReport {
+  std::size_t simulated = 0;  // rows with a measurement
+  std::size_t failed = 0;     // rows flagged in the status column
+};
+
+// Positions of the three gauge targets P1..P3 (columns) in the workpiece frame
+// for a tool pose there: P0 = P − tool_length · (tool axis P0→P); P_j at
+// `radius` from P0 in the plane normal to the tool axis, at 90°, 210°, 330°
+// from the tool frame's x axis toward its y axis (so P0P1 ∥ y, P2P3 ∥ x).
+Eigen::Matrix<double, 3, 3> gauge_targets(const HybridGeometry<double>& g, double radius, const Pose<double>& tool);
+
+// Simulates every row of `poses`: q = the row's q1..q6 if given, else the
+// nominal IK of the commanded pose; the actual pose = FK of `actual` from the
+// commanded pose (stewart) or the nominal IK's passive configuration (hybrid).
+// Output: measured pose columns (stewart) or pose + gauge targets (hybrid); the
+// input's id/layer/role/q/temp/time/dir columns are kept. A row whose IK or FK
+// fails keeps empty measurements, gets its reason in a `status` column, and is
+// reported through `warn` as "FILE:LINE: warning: ...".
+PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& poses, const SimulateOptions& options,
+                   SimulateReport& report, const std::function<void(const std::string&)>& warn = {});
+
+}  // namespace kincal::identify

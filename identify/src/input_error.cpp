@@ -1,0 +1,56 @@
+#include "kincal/identify/input_error.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace kincal::identify {
+
+std::string format_location(const std::string& file, std::size_t line, std::size_t column) {
+  std::string out = file;
+  if (line > 0) {
+    out += (out.empty() ? "" : ":") + std::to_string(line);
+    if (column > 0) out += ":" + std::to_string(column);
+  }
+  return out;
+}
+
+namespace {
+std::string compose(const std::string& file, std::size_t line, std::size_t column, const std::string& message) {
+  const std::string where = format_location(file, line, column);
+  return where.empty() ? message : where + ": " + message;
+}
+}  // namespace
+
+InputError::InputError(std::string file, std::size_t line, std::size_t column, std::string message)
+    : std::runtime_error(compose(file, line, column, message)),
+      file_(std::move(file)),
+      line_(line),
+      column_(column),
+      message_(std::move(message)) {}
+
+TextPosition position_of(std::string_view text, std::size_t offset) {
+  TextPosition pos;
+  const std::size_t end = offset < text.size() ? offset : text.size();
+  for (std::size_t i = 0; i < end; ++i) {
+    if (text[i] == '\n') {
+      ++pos.line;
+      pos.column = 1;
+    } else {
+      ++pos.column;
+    }
+  }
+  return pos;
+}
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, 0, std::string("cannot open file: ") + std::strerror(errno));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(path, 0, 0, "read error");
+  return ss.str();
+}
+
+}  // namespace kincal::identify

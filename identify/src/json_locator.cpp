@@ -1,0 +1,140 @@
+#include "json_locator.hpp"
+
+#include <set>
+
+namespace kincal::identify::detail {
+
+std::string child_path(const std::string& parent, const std::string& key) {
+  std::string out = parent + "/";
+  for (char c : key) {
+    if (c == '~')
+      out += "~0";
+    else if (c == '/')
+      out += "~1";
+    else
+      out += c;
+  }
+  return out;
+}
+
+std::string child_path(const std::string& parent, std::size_t index) { return parent + "/" + std::to_string(index); }
+
+std::size_t JsonLocations::value_offset(std::string path) const {
+  for (;;) {
+    const auto it = value.find(path);
+    if (it != value.end()) return it->second;
+    if (path.empty()) return 0;
+    const std::size_t slash = path.rfind('/');
+    path = slash == std::string::npos ? std::string() : path.substr(0, slash);
+  }
+}
+
+std::size_t JsonLocations::key_offset(const std::string& path) const {
+  const auto it = key.find(path);
+  return it != key.end() ? it->second : value_offset(path);
+}
+
+namespace {
+
+class Walker {
+ public:
+  Walker(std::string_view text, JsonLocations& out) : t_(text), out_(out) {}
+
+  void run() {
+    if (t_.size() >= 3 && t_.substr(0, 3) == "\xEF\xBB\xBF") i_ = 3;  // UTF-8 BOM
+    value("", 0);
+  }
+
+ private:
+  static constexpr int kMaxDepth = 256;
+
+  void ws() {
+    while (i_ < t_.size() && (t_[i_] == ' ' || t_[i_] == '\t' || t_[i_] == '\n' || t_[i_] == '\r')) ++i_;
+  }
+  bool at(char c) const { return i_ < t_.size() && t_[i_] == c; }
+
+  // Raw text of a string token (escapes kept as written), i_ past the quote.
+  std::string string_token() {
+    std::string s;
+    ++i_;  // opening quote
+    while (i_ < t_.size() && t_[i_] != '"') {
+      if (t_[i_] == '\\' && i_ + 1 < t_.size()) {
+        s += t_[i_++];
+      }
+      s += t_[i_++];
+    }
+    if (i_ < t_.size()) ++i_;  // closing quote
+    return s;
+  }
+
+  void value(const std::string& path, int depth) {
+    ws();
+    if (i_ >= t_.size() || depth > kMaxDepth) return;
+    out_.value.emplace(path, i_);
+    const char c = t_[i_];
+    if (c == '{') {
+      ++i_;
+      std::set<std::string> seen;
+      for (;;) {
+        ws();
+        if (i_ >= t_.size()) return;
+        if (at('}')) {
+          ++i_;
+          return;
+        }
+        if (at(',')) {
+          ++i_;
+          continue;
+        }
+        if (!at('"')) return;  // not valid JSON: stop
+        const std::size_t key_at = i_;
+        const std::string key = string_token();
+        const std::string p = child_path(path, key);
+        if (!seen.insert(key).second) out_.duplicates.push_back({p, key_at});
+        out_.key.emplace(p, key_at);
+        ws();
+        if (!at(':')) return;
+        ++i_;
+        value(p, depth + 1);
+      }
+    } else if (c == '[') {
+      ++i_;
+      std::size_t index = 0;
+      for (;;) {
+        ws();
+        if (i_ >= t_.size()) return;
+        if (at(']')) {
+          ++i_;
+          return;
+        }
+        if (at(',')) {
+          ++i_;
+          continue;
+        }
+        const std::size_t before = i_;
+        value(child_path(path, index++), depth + 1);
+        if (i_ == before) return;  // no progress: not valid JSON
+      }
+    } else if (c == '"') {
+      string_token();
+    } else {
+      while (i_ < t_.size() && t_[i_] != ',' && t_[i_] != ']' && t_[i_] != '}' && t_[i_] != ' ' && t_[i_] != '\n' &&
+             t_[i_] != '\r' && t_[i_] != '\t')
+        ++i_;
+    }
+  }
+
+  std::string_view t_;
+  JsonLocations& out_;
+  std::size_t i_ = 0;
+};
+
+}  // namespace
+
+JsonLocations locate_json(std::string_view text) {
+  JsonLocations out;
+  Walker(text, out).run();
+  return out;
+}
+
+}  // namespace kincal::identify::detail

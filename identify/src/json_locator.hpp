@@ -1,0 +1,36 @@
+// Private to identify/: where each value of an (already validated) JSON text
+// starts, keyed by JSON-pointer-like paths ("/base_joints/2/0"). nlohmann/json
+// gives no source positions for values, but schema errors must name the line
+// and column (GUIDE "Bars"), so this walks the text once more.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace kincal::identify::detail {
+
+struct JsonLocations {
+  std::map<std::string, std::size_t> value;  // path → offset of the value's first byte
+  std::map<std::string, std::size_t> key;    // path → offset of the key's opening quote
+  struct Duplicate {
+    std::string path;
+    std::size_t offset;
+  };
+  std::vector<Duplicate> duplicates;  // repeated keys in one object
+
+  // Offset of the value at `path`, or of its nearest recorded ancestor.
+  std::size_t value_offset(std::string path) const;
+  std::size_t key_offset(const std::string& path) const;
+};
+
+// `text` must be valid JSON (parse it with nlohmann first); on malformed input
+// the result is incomplete but the walk stays in bounds.
+JsonLocations locate_json(std::string_view text);
+
+std::string child_path(const std::string& parent, const std::string& key);
+std::string child_path(const std::string& parent, std::size_t index);
+
+}  // namespace kincal::identify::detail

@@ -1,0 +1,115 @@
+#include "kincal/identify/simulate.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "kincal/identify/input_error.hpp"
+
+namespace kincal::identify {
+
+Eigen::Matrix<double, 3, 3> gauge_targets(const HybridGeometry<double>& g, double radius, const Pose<double>& tool) {
+  // Tool frame T = F6·C (hybrid.hpp), so the tool axis F6·z is Cᵀ·z in tool
+  // coordinates; for machines built by make_hybrid_geometry it is −z.
+  const Vec3<double> axis_tool = g.tool_offset.transpose().col(2);
+  const Vec3<double> p0 = tool.p - g.tool_length * (tool.R * axis_tool);
+  Eigen::Matrix<double, 3, 3> t;
+  const double deg = pi<double>() / 180.0;
+  const double phi[3] = {90.0 * deg, 210.0 * deg, 330.0 * deg};
+  for (int j = 0; j < 3; ++j)
+    t.col(j) = p0 + radius * (tool.R * Vec3<double>(std::cos(phi[j]), std::sin(phi[j]), 0.0));
+  return t;
+}
+
+namespace {
+
+struct RowResult {
+  Status status = Status::Ok;
+  const char* stage = "";
+  Pose<double> pose;
+};
+
+RowResult run_row(const Robot& nominal, const Robot& actual, const PoseRow& row) {
+  RowResult out;
+  const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+  Vec6<double> q;
+  if (nominal.is_stewart()) {
+    if (row.q) {
+      q = *row.q;
+    } else {
+      out.status = stewart_ik(nominal.stewart(), commanded, q);
+      out.stage = "inverse kinematics of the commanded pose";
+      if (out.status != Status::Ok) return out;
+    }
+    // seed 001 §5.2: the error-free commands drive the error-containing FK.
+    out.status = stewart_fk(actual.stewart(), q, commanded, out.pose).status;
+    out.stage = "forward kinematics of the erroneous machine";
+    return out;
+  }
+  HybridPassive<double> passive = nominal.hybrid().home;
+  Vec6<double> q_ik;
+  const Status ik = hybrid_ik(nominal.hybrid(), commanded, q_ik, nullptr, &passive);
+  if (row.q) {
+    q = *row.q;
+    if (ik != Status::Ok) passive = nominal.hybrid().home;  // no better start available
+  } else {
+    out.status = ik;
+    out.stage = "inverse kinematics of the commanded pose";
+    if (ik != Status::Ok) return out;
+    q = q_ik;
+  }
+  out.status = hybrid_fk(actual.hybrid(), q, passive, out.pose).status;
+  out.stage = "forward kinematics of the erroneous machine";
+  return out;
+}
+
+}  // namespace
+
+PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& poses, const SimulateOptions& options,
+                   SimulateReport& report, const std::function<void(const std::string&)>& warn) {
+  if (nominal.is_stewart() != actual.is_stewart()) throw InputError("simulate: nominal and actual robot families differ");
+  if (!(options.noise_mm >= 0) || !std::isfinite(options.noise_mm))
+    throw InputError("--noise-mm must be a finite number >= 0");
+  if (!(options.noise_rad >= 0) || !std::isfinite(options.noise_rad))
+    throw InputError("--noise-rad must be a finite number >= 0");
+  if (poses.joint_count != Robot::joint_count())
+    throw InputError(poses.file, 0, 0, "the poses table has " + std::to_string(poses.joint_count) + " joints, the robot 6");
+
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
+
+  PoseTable out = poses;
+  out.has_measured = true;
+  out.has_targets = nominal.is_hybrid();
+  out.has_status = false;
+  out.ignored_columns.clear();
+  report = SimulateReport{};
+  for (PoseRow& row : out.rows) {
+    row.measured.reset();
+    row.targets.reset();
+    row.status = "ok";
+    const RowResult r = run_row(nominal, actual, row);
+    if (r.status != Status::Ok) {
+      row.status = to_string(r.status);
+      out.has_status = true;
+      ++report.failed;
+      if (warn)
+        warn(format_location(poses.file, row.line, 0) + ": warning: row '" + row.id + "': " + r.stage +
+             " failed (" + to_string(r.status) + "); written with empty measurements and status '" + row.status + "'");
+      continue;
+    }
+    Vec6<double> m = r.pose.to_xyz_rpy();
+    for (int k = 0; k < 3; ++k) m(k) += noise(options.noise_mm);
+    for (int k = 3; k < 6; ++k) m(k) += noise(options.noise_rad);
+    row.measured = m;
+    if (nominal.is_hybrid()) {
+      Eigen::Matrix<double, 3, 3> t = gauge_targets(actual.hybrid(), actual.gauge_radius, r.pose);
+      for (int k = 0; k < 9; ++k) t.data()[k] += noise(options.noise_mm);
+      row.targets = t;
+    }
+    ++report.simulated;
+  }
+  return out;
+}
+
+}  // namespace kincal::identify
