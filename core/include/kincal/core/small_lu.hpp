@@ -28,44 +28,43 @@ template <class Scalar, int N> class SmallLu {
   // measures how close to singular it is.
   bool factor(const Matrix& A) {
     KINCAL_UNROLL
-    for (int i = 0; i < N; ++i)
+    for (int i = 0; i < N; ++i) {
       KINCAL_UNROLL
       for (int j = 0; j < N; ++j) a_[i][j] = A(i, j);
+      row_[i] = i;
+    }
+    // Rows are pivoted through the index array row_, not swapped in memory.
     Scalar max_pivot(0), min_pivot(0);
     KINCAL_UNROLL
     for (int k = 0; k < N; ++k) {
       int p = k;
-      Scalar best = std::abs(a_[k][k]);
+      Scalar best = std::abs(a_[row_[k]][k]);
       KINCAL_UNROLL
       for (int i = k + 1; i < N; ++i) {
-        const Scalar v = std::abs(a_[i][k]);
+        const Scalar v = std::abs(a_[row_[i]][k]);
         if (v > best) {
           best = v;
           p = i;
         }
       }
-      perm_[k] = p;
       if (!(best > Scalar(0))) {  // zero or NaN column
         ratio_ = Scalar(0);
         return false;
       }
-      if (p != k)
-        KINCAL_UNROLL
-        for (int j = 0; j < N; ++j) {
-          const Scalar t = a_[k][j];
-          a_[k][j] = a_[p][j];
-          a_[p][j] = t;
-        }
+      const int pk = row_[p];
+      row_[p] = row_[k];
+      row_[k] = pk;
       if (k == 0 || best > max_pivot) max_pivot = best;
       if (k == 0 || best < min_pivot) min_pivot = best;
-      const Scalar inv = Scalar(1) / a_[k][k];
+      const Scalar inv = Scalar(1) / a_[pk][k];
       inv_pivot_[k] = inv;  // solve() multiplies: a division costs ~10× a multiply
       KINCAL_UNROLL
       for (int i = k + 1; i < N; ++i) {
-        const Scalar f = a_[i][k] * inv;
-        a_[i][k] = f;
+        Scalar* ri = a_[row_[i]];
+        const Scalar f = ri[k] * inv;
+        ri[k] = f;
         KINCAL_UNROLL
-        for (int j = k + 1; j < N; ++j) a_[i][j] -= f * a_[k][j];
+        for (int j = k + 1; j < N; ++j) ri[j] -= f * a_[pk][j];
       }
     }
     ratio_ = min_pivot / max_pivot;
@@ -79,22 +78,20 @@ template <class Scalar, int N> class SmallLu {
   Vector solve(const Vector& b) const {
     Scalar x[N];
     KINCAL_UNROLL
-    for (int i = 0; i < N; ++i) x[i] = b(i);
-    KINCAL_UNROLL
-    for (int k = 0; k < N; ++k) {
-      const Scalar t = x[k];
-      x[k] = x[perm_[k]];
-      x[perm_[k]] = t;
+    for (int i = 0; i < N; ++i) {
+      const Scalar* ri = a_[row_[i]];
+      Scalar v = b(row_[i]);
+      KINCAL_UNROLL
+      for (int j = 0; j < i; ++j) v -= ri[j] * x[j];
+      x[i] = v;
     }
     KINCAL_UNROLL
-    for (int i = 1; i < N; ++i)
-      KINCAL_UNROLL
-      for (int j = 0; j < i; ++j) x[i] -= a_[i][j] * x[j];
-    KINCAL_UNROLL
     for (int i = N - 1; i >= 0; --i) {
+      const Scalar* ri = a_[row_[i]];
+      Scalar v = x[i];
       KINCAL_UNROLL
-      for (int j = i + 1; j < N; ++j) x[i] -= a_[i][j] * x[j];
-      x[i] *= inv_pivot_[i];
+      for (int j = i + 1; j < N; ++j) v -= ri[j] * x[j];
+      x[i] = v * inv_pivot_[i];
     }
     Vector out;
     KINCAL_UNROLL
@@ -112,7 +109,7 @@ template <class Scalar, int N> class SmallLu {
  private:
   Scalar a_[N][N] = {};
   Scalar inv_pivot_[N] = {};
-  int perm_[N] = {};
+  int row_[N] = {};  // row_[k]: the stored row that is row k of P·A
   Scalar ratio_ = Scalar(0);
 };
 
