@@ -28,7 +28,9 @@ find_program(CMAKE_SIZE ${KINCAL_ARM_TRIPLE}-size REQUIRED)
 # newlib-nano (--specs=nano.specs) is smaller and is what bare-metal parts ship;
 # it must be given to compile and link alike (it selects newlib-nano's headers and
 # libraries).
-set(_kincal_common_flags "${KINCAL_ARM_CPU_FLAGS} --specs=nano.specs -Os -ffunction-sections -fdata-sections")
+# -fno-math-errno: core never reads errno, and without it sqrt() drags in
+# newlib's reentrancy data (~100 B of .data) to set errno on negative input.
+set(_kincal_common_flags "${KINCAL_ARM_CPU_FLAGS} --specs=nano.specs -Os -fno-math-errno -ffunction-sections -fdata-sections")
 set(CMAKE_C_FLAGS_INIT   "${_kincal_common_flags}")
 set(CMAKE_ASM_FLAGS_INIT "${KINCAL_ARM_CPU_FLAGS}")
 # core/ uses no exceptions/RTTI; function-local statics need no guard (single thread,

@@ -140,25 +140,22 @@ bool hybrid_forward_jacobian(const HybridGeometry<Scalar>& g, const HybridFrames
   if (!factor_regular(lu, M)) return false;
   Mat3<Scalar> Minv = lu.inverse();
   Minv.template topRows<2>() /= L;
-  // Tool twist per passive rate (K), then per actuated UPS rate (K·M⁻¹).
-  Eigen::Matrix<Scalar, 6, 3> K;
-  K.template block<3, 1>(0, 0) = ex.cross(f.P);
-  K.template block<3, 1>(3, 0) = ex;
-  K.template block<3, 1>(0, 1) = f.y1.cross(f.P);
-  K.template block<3, 1>(3, 1) = f.y1;
-  K.template block<3, 1>(0, 2) = f.w;
-  K.template block<3, 1>(3, 2).setZero();
-  Mat6<Scalar> J0;
-  J0.template leftCols<3>() = K * Minv;
+  // Tool twist in {R} per passive rate (k_lin, k_ang), then per actuated UPS
+  // rate (k·M⁻¹). Built column by column in {R}: no 6×6 temporaries, which
+  // keeps the firmware's worst-case stack small (docs/benchmarks.md).
+  const Mat3<Scalar>& Rw = g.workpiece_rotation;
+  const Vec3<Scalar> k_lin[3] = {Rw * ex.cross(f.P), Rw * f.y1.cross(f.P), Rw * f.w};
+  const Vec3<Scalar> k_ang[3] = {Rw.col(0), Rw * f.y1, Vec3<Scalar>::Zero()};
+  for (int j = 0; j < 3; ++j) {
+    J.template block<3, 1>(0, j) = k_lin[0] * Minv(0, j) + k_lin[1] * Minv(1, j) + k_lin[2] * Minv(2, j);
+    J.template block<3, 1>(3, j) = k_ang[0] * Minv(0, j) + k_ang[1] * Minv(1, j);
+  }
   const Vec3<Scalar> axes[3] = {f.w, f.F5.col(0), f.F6.col(1)};
   const Vec3<Scalar> through[3] = {f.Q, f.Q, f.P0};
   for (int j = 0; j < 3; ++j) {
-    J0.template block<3, 1>(0, 3 + j) = axes[j].cross(f.P - through[j]);
-    J0.template block<3, 1>(3, 3 + j) = axes[j];
+    J.template block<3, 1>(0, 3 + j) = Rw * axes[j].cross(f.P - through[j]);
+    J.template block<3, 1>(3, 3 + j) = Rw * axes[j];
   }
-  // Express in {R}: both halves rotate by wR0 (seed 000 Eq. (8)).
-  J.template topRows<3>() = g.workpiece_rotation * J0.template topRows<3>();
-  J.template bottomRows<3>() = g.workpiece_rotation * J0.template bottomRows<3>();
   return true;
 }
 
@@ -234,18 +231,22 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
   if (!hybrid_within_limits(g, cmd) || f.extension < g.min_extension || f.extension > g.max_extension)
     return Status::OutOfLimits;
   if (jacobian != nullptr) {
-    Mat6<Scalar> Jf;
-    if (!hybrid_forward_jacobian(g, f, Jf)) return Status::Singular;
     // Dimensionless J_s = D·J_f·D⁻¹ with D = diag(1,1,1,L,L,L) (angles × L).
     const Scalar L = g.characteristic_length;
-    Jf.template bottomRows<3>() *= L;
-    Jf.template rightCols<3>() /= L;
     SmallLu<Scalar, 6> lu;
-    if (!factor_regular(lu, Jf)) return Status::Singular;
-    Mat6<Scalar> inv = lu.inverse();  // = D·J_f⁻¹·D⁻¹
-    inv.template bottomRows<3>() /= L;
+    {
+      Mat6<Scalar> Jf;
+      if (!hybrid_forward_jacobian(g, f, Jf)) return Status::Singular;
+      Jf.template bottomRows<3>() *= L;
+      Jf.template rightCols<3>() *= Scalar(1) / L;
+      if (!factor_regular(lu, Jf)) return Status::Singular;
+    }
+    // Nothing can fail past this point, so the output is written in place:
+    // J_s⁻¹ = D·J_f⁻¹·D⁻¹, column by column, then unscaled.
+    Mat6<Scalar>& inv = *jacobian;
+    for (int j = 0; j < 6; ++j) inv.col(j) = lu.solve(Vec6<Scalar>::Unit(j));
+    inv.template bottomRows<3>() *= Scalar(1) / L;
     inv.template rightCols<3>() *= L;
-    *jacobian = inv;
   }
   if (passive != nullptr) {
     passive->theta1 = std::atan2(s1, c1);

@@ -27,12 +27,20 @@ template <class Scalar, int N> class SmallLu {
   // for a non-finite or exactly singular matrix; otherwise pivot_ratio()
   // measures how close to singular it is.
   bool factor(const Matrix& A) {
+    storage() = A;
+    return factor();
+  }
+
+  // The matrix to factorise can also be written straight into the
+  // factorisation's storage and factorised in place: one 6×6 copy fewer on
+  // the stack of a controller's FK (docs/benchmarks.md, firmware stack).
+  Eigen::Map<Eigen::Matrix<Scalar, N, N, Eigen::RowMajor>> storage() {
+    return Eigen::Map<Eigen::Matrix<Scalar, N, N, Eigen::RowMajor>>(&a_[0][0]);
+  }
+
+  bool factor() {
     KINCAL_UNROLL
-    for (int i = 0; i < N; ++i) {
-      KINCAL_UNROLL
-      for (int j = 0; j < N; ++j) a_[i][j] = A(i, j);
-      row_[i] = i;
-    }
+    for (int i = 0; i < N; ++i) row_[i] = i;
     // Rows are pivoted through the index array row_, not swapped in memory.
     Scalar max_pivot(0), min_pivot(0);
     KINCAL_UNROLL

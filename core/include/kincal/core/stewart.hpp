@@ -54,15 +54,21 @@ Eigen::Matrix<Scalar, 3, 6> stewart_leg_vectors(const StewartGeometry<Scalar>& g
 // Inverse-kinematics Jacobian J = ∂q/∂twist (6×6): row i is
 // [u_iᵀ, ((R·P_i) × u_i)ᵀ] with u_i the unit leg vector — the actuation wrench
 // of leg i (seed 000 Eq. (3) for a UPS limb). `arms` are R·P_i, `lengths` |L_i|.
-template <class Scalar>
-Mat6<Scalar> stewart_jacobian(const Eigen::Matrix<Scalar, 3, 6>& arms, const Eigen::Matrix<Scalar, 3, 6>& legs,
-                              const Vec6<Scalar>& lengths) {
-  Mat6<Scalar> J;
+template <class Scalar, class Out>
+void stewart_jacobian_into(Out&& J, const Eigen::Matrix<Scalar, 3, 6>& arms, const Eigen::Matrix<Scalar, 3, 6>& legs,
+                           const Vec6<Scalar>& lengths) {
   for (int i = 0; i < 6; ++i) {
     const Vec3<Scalar> u = legs.col(i) * (Scalar(1) / lengths(i));
     J.template block<1, 3>(i, 0) = u.transpose();
     J.template block<1, 3>(i, 3) = Vec3<Scalar>(arms.col(i)).cross(u).transpose();
   }
+}
+
+template <class Scalar>
+Mat6<Scalar> stewart_jacobian(const Eigen::Matrix<Scalar, 3, 6>& arms, const Eigen::Matrix<Scalar, 3, 6>& legs,
+                              const Vec6<Scalar>& lengths) {
+  Mat6<Scalar> J;
+  stewart_jacobian_into(J, arms, legs, lengths);
   return J;
 }
 
@@ -143,6 +149,7 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
   }
   const Vec6<Scalar> target = q + g.length_offset;
   const Scalar tolerance = options.relative_residual * target.cwiseAbs().maxCoeff();
+  const Scalar inv_length = Scalar(1) / g.characteristic_length;
   Pose<Scalar> x = guess;
   for (int it = 0;; ++it) {
     const Eigen::Matrix<Scalar, 3, 6> arms = x.R * g.platform;
@@ -159,14 +166,17 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
     }
     if (it == options.max_iterations || !(report.residual == report.residual)) break;
     // Solve in scaled unknowns (angles × L) so the singularity test is
-    // dimensionless, then scale back.
+    // dimensionless, then scale back. The Jacobian is built in the LU's own
+    // storage (no copies on the controller's stack).
     SmallLu<Scalar, 6> lu;
-    if (!factor_regular(lu, scale_angular_columns(stewart_jacobian(arms, legs, lengths), g.characteristic_length))) {
+    stewart_jacobian_into(lu.storage(), arms, legs, lengths);
+    lu.storage().template rightCols<3>() *= inv_length;
+    if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) {
       report.status = Status::Singular;
       return report;
     }
     Twist<Scalar> step = -lu.solve(residual);
-    step.template tail<3>() *= Scalar(1) / g.characteristic_length;
+    step.template tail<3>() *= inv_length;
     x = apply_twist(x, step);
   }
   report.status = Status::NotConverged;
