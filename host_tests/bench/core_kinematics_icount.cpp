@@ -28,102 +28,66 @@ template <class T> inline __attribute__((always_inline)) void opaque(T& value) {
   asm volatile("" : "+m"(value) : : "memory");
 }
 
+// One machine's IK, N times, with or without the Jacobian.
+template <class S, class Geometry, class Ik> int ik_loop(long n, bool with_jacobian, Geometry g, Pose<S> pose, Ik ik) {
+  Vec6<S> q = Vec6<S>::Zero();
+  Mat6<S> J = Mat6<S>::Zero();
+  Mat6<S>* const jacobian = with_jacobian ? &J : nullptr;
+  Status s = ik(g, pose, q, jacobian);
+  std::printf("status=%s\n", to_string(s));
+  opaque(g);
+  for (long i = 0; i < n; ++i) {
+    opaque(pose);
+    s = ik(g, pose, q, jacobian);
+    opaque(s);
+    opaque(q);
+    opaque(J);
+  }
+  return 0;
+}
+
+// One machine's FK from its home to the joints of `target`, N times.
+template <class S, class Geometry, class Guess, class Ik, class Fk>
+int fk_loop(long n, Geometry g, Guess guess, const Pose<double>& target, Ik ik, Fk fk) {
+  Vec6<S> q = Vec6<S>::Zero();
+  ik(g, target.template cast<S>(), q, nullptr);
+  Pose<S> out;
+  FkReport<S> r = fk(g, q, guess, out);
+  const FkAccuracy acc = fk_accuracy(out, target);
+  std::printf("status=%s iterations=%d pos_err_mm=%.3e rot_err_rad=%.3e\n", to_string(r.status), r.iterations,
+              acc.position_mm, acc.orientation_rad);
+  opaque(g);
+  for (long i = 0; i < n; ++i) {
+    opaque(q);
+    opaque(guess);
+    r = fk(g, q, guess, out);
+    opaque(r);
+    opaque(out);
+  }
+  return 0;
+}
+
 template <class S> int stewart_ik_loop(long n, bool with_jacobian) {
-  StewartGeometry<S> g = make_stewart_seed001<S>();
-  Pose<S> pose = stewart_target<S>();
-  Vec6<S> q = Vec6<S>::Zero();
-  Mat6<S> J = Mat6<S>::Zero();
-  Status s = stewart_ik(g, pose, q, with_jacobian ? &J : nullptr);
-  std::printf("status=%s\n", to_string(s));
-  opaque(g);
-  if (with_jacobian) {
-    for (long i = 0; i < n; ++i) {
-      opaque(pose);
-      s = stewart_ik(g, pose, q, &J);
-      opaque(s);
-      opaque(q);
-      opaque(J);
-    }
-  } else {
-    for (long i = 0; i < n; ++i) {
-      opaque(pose);
-      s = stewart_ik(g, pose, q);
-      opaque(s);
-      opaque(q);
-    }
-  }
-  return 0;
+  return ik_loop<S>(n, with_jacobian, make_stewart_seed001<S>(), stewart_target<S>(),
+                    [](const auto& g, const auto& p, auto& q, Mat6<S>* J) { return stewart_ik(g, p, q, J); });
 }
-
-template <class S> int stewart_fk_loop(long n) {
-  StewartGeometry<S> g = make_stewart_seed001<S>();
-  Vec6<S> q = Vec6<S>::Zero();
-  stewart_ik(g, stewart_target<S>(), q);
-  Pose<S> guess = g.home;
-  Pose<S> out;
-  FkReport<S> r = stewart_fk(g, q, guess, out);
-  const FkAccuracy acc = fk_accuracy(out, stewart_target<double>());
-  std::printf("status=%s iterations=%d pos_err_mm=%.3e rot_err_rad=%.3e\n", to_string(r.status), r.iterations,
-              acc.position_mm, acc.orientation_rad);
-  opaque(g);
-  for (long i = 0; i < n; ++i) {
-    opaque(q);
-    opaque(guess);
-    r = stewart_fk(g, q, guess, out);
-    opaque(r);
-    opaque(out);
-  }
-  return 0;
-}
-
 template <class S> int hybrid_ik_loop(long n, bool with_jacobian) {
-  HybridGeometry<S> g = make_hybrid_seed000<S>();
-  Pose<S> pose = hybrid_target<S>();
-  Vec6<S> q = Vec6<S>::Zero();
-  Mat6<S> J = Mat6<S>::Zero();
-  HybridPassive<S> passive;
-  Status s = hybrid_ik(g, pose, q, with_jacobian ? &J : nullptr, with_jacobian ? &passive : nullptr);
-  std::printf("status=%s\n", to_string(s));
-  opaque(g);
-  if (with_jacobian) {
-    for (long i = 0; i < n; ++i) {
-      opaque(pose);
-      s = hybrid_ik(g, pose, q, &J, &passive);
-      opaque(s);
-      opaque(q);
-      opaque(J);
-      opaque(passive);
-    }
-  } else {
-    for (long i = 0; i < n; ++i) {
-      opaque(pose);
-      s = hybrid_ik(g, pose, q);
-      opaque(s);
-      opaque(q);
-    }
-  }
-  return 0;
+  return ik_loop<S>(n, with_jacobian, make_hybrid_seed000<S>(), hybrid_target<S>(),
+                    [](const auto& g, const auto& p, auto& q, Mat6<S>* J) { return hybrid_ik(g, p, q, J); });
 }
-
+template <class S> int stewart_fk_loop(long n) {
+  const StewartGeometry<S> g = make_stewart_seed001<S>();
+  return fk_loop<S>(
+      n, g, g.home, stewart_target<double>(),
+      [](const auto& gg, const auto& p, auto& q, Mat6<S>* J) { return stewart_ik(gg, p, q, J); },
+      [](const auto& gg, const auto& q, const auto& guess, auto& out) { return stewart_fk(gg, q, guess, out); });
+}
 template <class S> int hybrid_fk_loop(long n) {
-  HybridGeometry<S> g = make_hybrid_seed000<S>();
-  Vec6<S> q = Vec6<S>::Zero();
-  hybrid_ik(g, hybrid_target<S>(), q);
-  HybridPassive<S> guess = g.home;
-  Pose<S> out;
-  FkReport<S> r = hybrid_fk(g, q, guess, out);
-  const FkAccuracy acc = fk_accuracy(out, hybrid_target<double>());
-  std::printf("status=%s iterations=%d pos_err_mm=%.3e rot_err_rad=%.3e\n", to_string(r.status), r.iterations,
-              acc.position_mm, acc.orientation_rad);
-  opaque(g);
-  for (long i = 0; i < n; ++i) {
-    opaque(q);
-    opaque(guess);
-    r = hybrid_fk(g, q, guess, out);
-    opaque(r);
-    opaque(out);
-  }
-  return 0;
+  const HybridGeometry<S> g = make_hybrid_seed000<S>();
+  return fk_loop<S>(
+      n, g, g.home, hybrid_target<double>(),
+      [](const auto& gg, const auto& p, auto& q, Mat6<S>* J) { return hybrid_ik(gg, p, q, J); },
+      [](const auto& gg, const auto& q, const auto& guess, auto& out) { return hybrid_fk(gg, q, guess, out); });
 }
 
 struct Operation {

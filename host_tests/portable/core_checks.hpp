@@ -7,6 +7,7 @@
 #include "kincal/core/reference_machines.hpp"
 #include "portable/check.hpp"
 
+#include <cstdint>
 #include <limits>
 
 namespace kincal::test {
@@ -113,33 +114,71 @@ template <class Scalar> void check_stewart_round_trip(Checker& c, int count) {
   KINCAL_CHECK(c, worst_iterations <= 6);
 }
 
-// ∂q/∂twist against central differences of the IK (in double; the float
-// Jacobian is checked against the double one).
-template <class Scalar> void check_stewart_jacobian(Checker& c) {
-  const StewartGeometry<double> g = make_stewart_seed001<double>();
-  const StewartGeometry<Scalar> gs = g.template cast<Scalar>();
-  Random rng(99);
+// ∂q/∂twist of an IK against central differences of the same IK (in double;
+// the Scalar Jacobian is checked against the double one). `ik(g, pose, q, J*)`
+// is the machine's IK; poses are drawn in [lo, hi].
+template <class Scalar, class Geometry, class Ik>
+void check_ik_jacobian(Checker& c, const Geometry& g, Ik ik, const double lo[6], const double hi[6],
+                       std::uint64_t seed, double fd_tolerance, double float_tolerance) {
+  const auto gs = g.template cast<Scalar>();
+  Random rng(seed);
   for (int k = 0; k < 50; ++k) {
-    const Pose<double> pose = random_pose<double>(rng, kStewartLo, kStewartHi);
+    const Pose<double> pose = random_pose<double>(rng, lo, hi);
     Vec6<double> q;
     Mat6<double> J;
-    if (!KINCAL_CHECK(c, stewart_ik(g, pose, q, &J) == Status::Ok)) continue;
+    if (!KINCAL_CHECK(c, ik(g, pose, q, &J) == Status::Ok)) continue;
     const double h = 1e-6;
     Mat6<double> fd;
     for (int j = 0; j < 6; ++j) {
       Twist<double> t = Twist<double>::Zero();
       t(j) = h;
       Vec6<double> qp, qm;
-      stewart_ik(g, apply_twist(pose, t), qp);
-      stewart_ik(g, apply_twist(pose, Twist<double>(-t)), qm);
+      ik(g, apply_twist(pose, t), qp, static_cast<Mat6<double>*>(nullptr));
+      ik(g, apply_twist(pose, Twist<double>(-t)), qm, static_cast<Mat6<double>*>(nullptr));
       fd.col(j) = (qp - qm) / (2 * h);
     }
-    KINCAL_CHECK(c, (fd - J).norm() < 1e-6 * (1 + J.norm()));
+    KINCAL_CHECK(c, (fd - J).norm() < fd_tolerance * (1 + J.norm()));
     Vec6<Scalar> qs;
     Mat6<Scalar> Js;
-    if (!KINCAL_CHECK(c, stewart_ik(gs, pose.template cast<Scalar>(), qs, &Js) == Status::Ok)) continue;
-    KINCAL_CHECK(c, (Js.template cast<double>() - J).norm() < (sizeof(Scalar) == 8 ? 1e-12 : 1e-3) * (1 + J.norm()));
+    if (!KINCAL_CHECK(c, ik(gs, pose.template cast<Scalar>(), qs, &Js) == Status::Ok)) continue;
+    KINCAL_CHECK(c, (Js.template cast<double>() - J).norm() <
+                        (sizeof(Scalar) == 8 ? 1e-10 : float_tolerance) * (1 + J.norm()));
   }
+}
+
+// The first sign change of f on (0, 3.1] in steps of 0.01, bisected to
+// rounding; 0 if there is none. Used to find singular configurations as zeros
+// of det(J), an independent route to the Singular status.
+template <class F> double first_sign_change(F f) {
+  double lo = 0, flo = f(0.0);
+  for (double x = 0.01; x < 3.1; x += 0.01) {
+    if ((f(x) > 0) != (flo > 0)) {
+      double hi = x;
+      for (int i = 0; i < 80; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if ((f(mid) > 0) == (flo > 0)) lo = mid; else hi = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+    lo = x;
+    flo = f(x);
+  }
+  return 0;
+}
+
+struct StewartIk {
+  template <class S> Status operator()(const StewartGeometry<S>& g, const Pose<S>& p, Vec6<S>& q, Mat6<S>* J) const {
+    return stewart_ik(g, p, q, J);
+  }
+};
+struct HybridIk {
+  template <class S> Status operator()(const HybridGeometry<S>& g, const Pose<S>& p, Vec6<S>& q, Mat6<S>* J) const {
+    return hybrid_ik(g, p, q, J);
+  }
+};
+
+template <class Scalar> void check_stewart_jacobian(Checker& c) {
+  check_ik_jacobian<Scalar>(c, make_stewart_seed001<double>(), StewartIk(), kStewartLo, kStewartHi, 99, 1e-6, 1e-3);
 }
 
 // A pose where the 6-UPS Jacobian is singular: rotate about z at the home
@@ -147,25 +186,8 @@ template <class Scalar> void check_stewart_jacobian(Checker& c) {
 // singularity of a hexapod). Returns the yaw angle, or 0 if none was found.
 inline double find_stewart_singular_yaw() {
   const StewartGeometry<double> g = make_stewart_seed001<double>();
-  auto det_at = [&](double yaw) {
-    const Pose<double> p = Pose<double>::from_xyz_rpy(0, 0, 200, 0, 0, yaw);
-    return stewart_jacobian(g, p).determinant();
-  };
-  double lo = 0, dlo = det_at(0);
-  for (double yaw = 0.01; yaw < 3.1; yaw += 0.01) {
-    const double d = det_at(yaw);
-    if ((d > 0) != (dlo > 0)) {
-      double hi = yaw;
-      for (int i = 0; i < 80; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        if ((det_at(mid) > 0) == (dlo > 0)) lo = mid; else hi = mid;
-      }
-      return 0.5 * (lo + hi);
-    }
-    lo = yaw;
-    dlo = d;
-  }
-  return 0;
+  return first_sign_change(
+      [&](double yaw) { return stewart_jacobian(g, Pose<double>::from_xyz_rpy(0, 0, 200, 0, 0, yaw)).determinant(); });
 }
 
 template <class Scalar> void check_stewart_statuses(Checker& c) {
@@ -247,56 +269,18 @@ template <class Scalar> void check_hybrid_round_trip(Checker& c, int count) {
 }
 
 template <class Scalar> void check_hybrid_jacobian(Checker& c) {
-  const HybridGeometry<double> g = make_hybrid_seed000<double>();
-  const HybridGeometry<Scalar> gs = g.template cast<Scalar>();
-  Random rng(4242);
-  for (int k = 0; k < 50; ++k) {
-    const Pose<double> pose = random_pose<double>(rng, kHybridLo, kHybridHi);
-    Vec6<double> q;
-    Mat6<double> J;
-    if (!KINCAL_CHECK(c, hybrid_ik(g, pose, q, &J) == Status::Ok)) continue;
-    const double h = 1e-6;
-    Mat6<double> fd;
-    for (int j = 0; j < 6; ++j) {
-      Twist<double> t = Twist<double>::Zero();
-      t(j) = h;
-      Vec6<double> qp, qm;
-      hybrid_ik(g, apply_twist(pose, t), qp);
-      hybrid_ik(g, apply_twist(pose, Twist<double>(-t)), qm);
-      fd.col(j) = (qp - qm) / (2 * h);
-    }
-    KINCAL_CHECK(c, (fd - J).norm() < 1e-5 * (1 + J.norm()));
-    Vec6<Scalar> qs;
-    Mat6<Scalar> Js;
-    if (!KINCAL_CHECK(c, hybrid_ik(gs, pose.template cast<Scalar>(), qs, &Js) == Status::Ok)) continue;
-    KINCAL_CHECK(c, (Js.template cast<double>() - J).norm() < (sizeof(Scalar) == 8 ? 1e-10 : 2e-2) * (1 + J.norm()));
-  }
+  check_ik_jacobian<Scalar>(c, make_hybrid_seed000<double>(), HybridIk(), kHybridLo, kHybridHi, 4242, 1e-5, 2e-2);
 }
 
 // A wrist configuration where the hybrid's forward Jacobian loses rank: scan
 // θ5 at the reference until det changes sign, then bisect. Returns θ5 or 0.
 inline double find_hybrid_singular_theta5() {
   const HybridGeometry<double> g = make_hybrid_seed000<double>();
-  auto det_at = [&](double t5) {
+  return first_sign_change([&](double t5) {
     Mat6<double> J;
     hybrid_forward_jacobian(g, hybrid_frames(g, g.home, Vec3<double>(0, t5, 0)), J);
     return J.determinant();
-  };
-  double lo = 0, dlo = det_at(0);
-  for (double t5 = 0.01; t5 < 3.1; t5 += 0.01) {
-    const double d = det_at(t5);
-    if ((d > 0) != (dlo > 0)) {
-      double hi = t5;
-      for (int i = 0; i < 80; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        if ((det_at(mid) > 0) == (dlo > 0)) lo = mid; else hi = mid;
-      }
-      return 0.5 * (lo + hi);
-    }
-    lo = t5;
-    dlo = d;
-  }
-  return 0;
+  });
 }
 
 template <class Scalar> void check_hybrid_statuses(Checker& c) {
