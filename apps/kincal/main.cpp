@@ -5,6 +5,7 @@
 // Exit status: 0 success; 1 bad input or a failed run; 2 usage errors and
 // subcommands that are not implemented yet.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <charconv>
 #include <cstdint>
 #include <exception>
@@ -15,10 +16,12 @@
 
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/model.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/robot.hpp"
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/simulate.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
 #include "kincal/identify/version.hpp"
 
 namespace ki = kincal::identify;
@@ -96,6 +99,118 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
   return 0;
 }
 
+struct IdentifyArgs {
+  std::string robot, data, out, estimator = "ols", effects, json;
+};
+
+nlohmann::json stats_json(const ki::PoseErrorStats& s) {
+  return {{"nodes", s.count},
+          {"max_position_um", 1e3 * s.max_position_mm},
+          {"mean_position_um", 1e3 * s.mean_position_mm},
+          {"rms_position_um", 1e3 * s.rms_position_mm},
+          {"max_orientation_urad", 1e6 * s.max_orientation_rad},
+          {"mean_orientation_urad", 1e6 * s.mean_orientation_rad}};
+}
+
+int run_identify(const IdentifyArgs& a) {
+  const ki::Robot robot = ki::load_robot(a.robot);
+  if (!a.effects.empty())
+    throw ki::InputError("--effects: the effects library is not available yet (issue #4)");
+  if (!robot.is_stewart())
+    throw ki::InputError(a.robot + ": identification of the hybrid robot is not implemented yet (issue #3: the "
+                                   "seed 000 source-error model and the coarse + fine pipeline are in progress)");
+  if (a.estimator != "ols")
+    throw ki::InputError("--estimator " + a.estimator +
+                         ": the 6-UPS (seed 001) calibration uses ols; ridge, liu and pcr come with issue #3");
+  ki::PoseTableOptions options;
+  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+  const ki::PoseTable data = ki::read_pose_table(a.data, options);
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
+  const ki::StewartCalibration c = ki::calibrate_stewart(robot, data);
+  std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "
+            << c.condition_number << "\n  iteration   max dQ_int (mm+rad)   rms |dp| (um)   |step| (mm)\n";
+  for (const ki::StewartIteration& h : c.history) {
+    char line[128];
+    std::snprintf(line, sizeof line, "  %9d %21.3e %15.4f %13.3e\n", h.iteration, h.max_dq_int, 1e3 * h.rms_position_mm,
+                  h.step_norm);
+    std::cout << line;
+  }
+  const ki::CalibrationModel model = ki::stewart_model(robot, c, a.data);
+  ki::write_model_file(model, a.out);
+  const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
+  const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
+  std::cout << "\nresiduals before calibration (measured - nominal model):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+  std::cout << "\nmodel written to " << a.out << "\n";
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["robot"] = robot.name;
+    j["data"] = a.data;
+    j["estimator"] = "ols";
+    j["rank"] = c.rank;
+    j["parameters"] = 42;
+    j["dropped"] = nlohmann::json::array();
+    j["condition_number"] = c.condition_number;
+    j["sigma_um"] = 1e3 * c.sigma_mm;
+    j["iterations"] = c.history.size();
+    j["outliers"] = nlohmann::json::array();
+    nlohmann::json res_before, res_after;
+    res_before["all"] = stats_json(before.all);
+    res_after["all"] = stats_json(after.all);
+    for (const auto& [name, st] : before.groups) res_before[name] = stats_json(st);
+    for (const auto& [name, st] : after.groups) res_after[name] = stats_json(st);
+    j["residual_before"] = res_before;
+    j["residual"] = res_after;
+    std::ofstream f(a.json);
+    if (!f) throw ki::InputError(a.json, 0, 0, "cannot open for writing");
+    f << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
+int run_compensate(const std::string& robot_name, const std::string& model_path, const std::string& poses_path,
+                   const std::string& out_path) {
+  const ki::Robot robot = ki::load_robot(robot_name);
+  const ki::CalibrationModel model = ki::read_model_file(model_path);
+  if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot))
+    throw ki::InputError(model_path, 0, 0,
+                         "was identified on robot '" + model.nominal.name + "', not on " + robot_name);
+  if (!robot.is_stewart())
+    throw ki::InputError(robot_name + ": compensation of the hybrid robot (seed 000 Eq. (16)) is not implemented yet "
+                                      "(issue #3)");
+  const ki::Robot calibrated = ki::calibrated_robot(model);
+  ki::PoseTableOptions options;
+  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+  const ki::PoseTable poses = ki::read_pose_table(poses_path, options);
+  ki::PoseTable out;
+  out.file = out_path;
+  out.has_q = true;
+  std::size_t failed = 0;
+  for (const ki::PoseRow& r : poses.rows) {
+    ki::PoseRow o;
+    o.id = r.id;
+    o.commanded = r.commanded;
+    kincal::Vec6<double> q;
+    // seed 001's compensation: the IK of the corrected geometry.
+    const kincal::Status s = calibrated.inverse(kincal::Pose<double>::from_xyz_rpy(r.commanded), q);
+    o.status = kincal::to_string(s);
+    if (s == kincal::Status::Ok) {
+      o.q = Eigen::VectorXd(q);
+    } else {
+      ++failed;
+      std::cerr << poses_path << ":" << r.line << ": warning: row '" << r.id << "': " << kincal::to_string(s)
+                << "; written without joint commands\n";
+    }
+    out.rows.push_back(o);
+  }
+  out.has_status = failed > 0;
+  if (failed == poses.rows.size()) throw ki::InputError(poses_path, 0, 0, "no pose could be compensated");
+  ki::write_pose_table_file(out, out_path);
+  return 0;
+}
+
 int not_implemented(const std::string& command, const std::string& issue) {
   std::cerr << "kincal: " << command << ": not implemented yet (" << issue << ")\n";
   return kExitUsage;
@@ -141,25 +256,30 @@ int run(int argc, char** argv) {
   errors->add_option("--reference", errors_reference, "compare measured poses with this file's, matched by id");
   errors->add_flag("--rows", errors_rows, "print every row, not only the summary");
 
+  IdentifyArgs ident;
+  CLI::App* identify = app.add_subcommand("identify", "identify model parameters from measurements");
+  identify->add_option("--robot", ident.robot, "built-in robot name or robot description file")->required();
+  identify->add_option("--data", ident.data, "measurement CSV")->required();
+  identify->add_option("--out", ident.out, "MODEL.json to write")->required();
+  identify->add_option("--estimator", ident.estimator, "ols (default), ridge, liu, pcr")
+      ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
+  identify->add_option("--effects", ident.effects, "effects to include (issue #4)");
+  identify->add_option("--json", ident.json, "SUMMARY.json to write");
+
+  std::string comp_robot, comp_model, comp_poses, comp_out;
+  CLI::App* compensate = app.add_subcommand("compensate", "turn requested poses into compensated joint commands");
+  compensate->add_option("--robot", comp_robot, "built-in robot name or robot description file")->required();
+  compensate->add_option("--model", comp_model, "MODEL.json from kincal identify")->required();
+  compensate->add_option("--poses", comp_poses, "requested poses CSV")->required();
+  compensate->add_option("--out", comp_out, "JOINTS.csv to write (id, x..rz, q1..q6)")->required();
+
   // Registered with their GUIDE options so scripts fail loudly and usefully.
-  std::string s1, s2, s3, s4, s5, s6;
-  CLI::App* identify = app.add_subcommand("identify", "identify model parameters (not implemented yet)");
-  identify->add_option("--robot", s1)->required();
-  identify->add_option("--data", s2)->required();
-  identify->add_option("--out", s3)->required();
-  identify->add_option("--estimator", s4)->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
-  identify->add_option("--effects", s5);
-  identify->add_option("--json", s6);
+  std::string s1, s2, s3, s4;
   CLI::App* diagnose = app.add_subcommand("diagnose", "diagnose residuals (not implemented yet)");
   diagnose->add_option("--robot", s1)->required();
   diagnose->add_option("--data", s2)->required();
   diagnose->add_option("--json", s3)->required();
   diagnose->add_option("--report", s4);
-  CLI::App* compensate = app.add_subcommand("compensate", "compensate a pose stream (not implemented yet)");
-  compensate->add_option("--robot", s1)->required();
-  compensate->add_option("--model", s2)->required();
-  compensate->add_option("--poses", s3)->required();
-  compensate->add_option("--out", s4)->required();
   CLI::App* table = app.add_subcommand("table", "generate a calibration table header (not implemented yet)");
   table->add_option("--model", s1)->required();
   table->add_option("--out", s2)->required();
@@ -190,9 +310,9 @@ int run(int argc, char** argv) {
   if (*simulate) return run_simulate(sim);
   if (*robot) return run_robot(robot_name, robot_out, list_params);
   if (*errors) return run_errors(errors_data, errors_reference, errors_rows);
-  if (*identify) return not_implemented("identify", "issue #3: identification pipelines and estimators");
+  if (*identify) return run_identify(ident);
   if (*diagnose) return not_implemented("diagnose", "issue #4: residual diagnosis and the physical-effect library");
-  if (*compensate) return not_implemented("compensate", "issues #3 and #5: compensation of the NC pose stream");
+  if (*compensate) return run_compensate(comp_robot, comp_model, comp_poses, comp_out);
   if (*table) return not_implemented("table", "issue #5: generated calibration tables for the firmware");
   return kExitUsage;
 }

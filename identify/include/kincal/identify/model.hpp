@@ -1,0 +1,41 @@
+// MODEL.json: an identified calibration model (GUIDE "Command-line contract",
+// `kincal identify --out MODEL.json`). It carries the nominal robot it was
+// identified on, the parameter errors with their standard errors, which of them
+// were identifiable, and the estimator with its settings — everything
+// `kincal compensate` and `kincal table` need, so a model file stands alone.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+struct ModelParameter {
+  std::string name;         // as in PARAMS.csv (e.g. dXB1)
+  double value = 0;         // identified error, added to the nominal quantity
+  double standard_error = 0;  // 0 when not available
+  bool identifiable = true;   // false: held at 0 (not estimable from the data)
+};
+
+struct CalibrationModel {
+  Robot nominal;
+  std::vector<ModelParameter> parameters;
+  std::string estimator;                     // "ols", "liu", ...
+  std::map<std::string, double> settings;    // estimator settings (e.g. liu_d)
+  std::string data_file;                     // the measurement file it came from
+};
+
+// nominal + identified errors (the machine as the model believes it is).
+Robot calibrated_robot(const CalibrationModel& model);
+
+std::string model_to_json(const CalibrationModel& model);
+void write_model_file(const CalibrationModel& model, const std::string& path);
+// Throws InputError with file:line:column on malformed JSON, a missing key,
+// an unknown parameter name for the robot, or a non-finite value.
+CalibrationModel parse_model(const std::string& text, const std::string& file);
+CalibrationModel read_model_file(const std::string& path);
+
+}  // namespace kincal::identify

@@ -1,0 +1,71 @@
+// Calibration of a 6-UPS machine by seed 001's method: the 42-parameter
+// inverse-kinematics error model (Eqs. (6)–(12): per leg the base hinge B_i,
+// the platform hinge P_i and the leg length l_i), identified by least squares
+// from measured poses, iterated (steps 5–10 of Section 5) with the exact
+// forward kinematics of the corrected machine until the parameters settle;
+// compensation is the IK of the corrected geometry.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "kincal/core/stewart.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/pose_errors.hpp"
+
+namespace kincal::identify {
+
+constexpr int kStewartParameterCount = 42;  // per leg: dXB, dYB, dZB, dl, dXP, dYP, dZP
+
+using StewartErrorJacobian = Eigen::Matrix<double, 6, kStewartParameterCount>;
+
+// Linearised error model at a pose of geometry g: the pose error twist
+// (v, ω) of the platform (core/pose.hpp convention) per unit parameter error,
+// with the commanded leg lengths held. From seed 001 Eq. (9), J·dQ = B, with
+// the platform twist in place of dQ: row block of leg i is
+//   J⁻¹·e_i · [u_iᵀ, 1, −(Rᵀu_i)ᵀ]   for (dB_i, dl_i, dP_i).
+StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose);
+
+// nominal + θ (θ in the order of the parameter table: dXB1 dYB1 dZB1 dl1 dXP1 dYP1 dZP1 …).
+StewartGeometry<double> stewart_with_errors(const StewartGeometry<double>& nominal, const Eigen::VectorXd& theta);
+
+struct StewartIteration {
+  int iteration = 0;
+  double max_dq_int = 0;       // max over cal nodes of dQ1 + dQ2 (seed 001 Eqs. (15)–(17)), mm + rad
+  double rms_position_mm = 0;  // RMS position residual over cal nodes
+  double step_norm = 0;        // |Δθ|, mm
+};
+
+struct StewartCalibrationOptions {
+  int max_iterations = 20;
+  double step_tolerance = 1e-9;  // stop when |Δθ| ≤ step_tolerance · (1 + |θ|)
+};
+
+struct StewartCalibration {
+  Eigen::VectorXd theta;            // identified errors (42)
+  Eigen::VectorXd standard_error;   // OLS standard errors at the solution
+  std::vector<StewartIteration> history;
+  int rank = 0;
+  double condition_number = 0;      // of the column-scaled design
+  std::size_t nodes = 0;            // cal nodes used
+  double sigma_mm = 0;              // residual σ (RSS / (n − m))^½ of the last fit
+};
+
+// Identifies θ from the table's `cal` rows (test rows are never used). Each row
+// needs a measured pose; its joint commands are the row's q1..q6 or the
+// nominal IK of its commanded pose. Throws InputError for too few nodes
+// (fewer than 7, seed 001 Section 3), missing measurements, a rank-deficient
+// design (naming the parameters), or FK failures of the corrected machine.
+StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data,
+                                     const StewartCalibrationOptions& options = {});
+
+// Residuals of a (calibrated) 6-UPS against measured data, all rows: the
+// measured pose minus the FK of `robot` for the row's joint commands (q1..q6,
+// or the nominal IK of the commanded pose). Grouped by role and layer.
+PoseErrorReport stewart_residuals(const Robot& nominal, const Robot& robot, const PoseTable& data);
+
+CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& calibration, const std::string& data_file);
+
+}  // namespace kincal::identify

@@ -1,0 +1,191 @@
+#include "kincal/identify/stewart_calibration.hpp"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <cmath>
+
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/parameters.hpp"
+
+namespace kincal::identify {
+
+StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose) {
+  const Eigen::Matrix<double, 3, 6> arms = pose.R * g.platform;
+  const Eigen::Matrix<double, 3, 6> legs = stewart_leg_vectors(g, pose);
+  const Vec6<double> lengths = legs.colwise().norm().transpose();
+  // J·twist = δ(leg length); the actual machine keeps |L_i'| = q_i + l_i', so a
+  // parameter error c_i = dl_i + u_i·dB_i − u_i·(R·dP_i) needs J·twist = c.
+  const Eigen::PartialPivLU<Mat6<double>> lu(stewart_jacobian(arms, legs, lengths));
+  StewartErrorJacobian E;
+  for (int i = 0; i < 6; ++i) {
+    const Vec6<double> column = lu.solve(Vec6<double>::Unit(i));  // J⁻¹·e_i
+    const Vec3<double> u = legs.col(i) / lengths(i);
+    const Vec3<double> Rtu = pose.R.transpose() * u;
+    for (int a = 0; a < 3; ++a) {
+      E.col(7 * i + a) = column * u(a);        // dB_i
+      E.col(7 * i + 4 + a) = -column * Rtu(a);  // dP_i (platform frame)
+    }
+    E.col(7 * i + 3) = column;  // dl_i
+  }
+  return E;
+}
+
+StewartGeometry<double> stewart_with_errors(const StewartGeometry<double>& nominal, const Eigen::VectorXd& theta) {
+  StewartGeometry<double> g = nominal;
+  for (int i = 0; i < 6; ++i) {
+    g.base.col(i) += theta.segment<3>(7 * i);
+    g.length_offset(i) += theta(7 * i + 3);
+    g.platform.col(i) += theta.segment<3>(7 * i + 4);
+  }
+  return g;
+}
+
+namespace {
+
+struct Node {
+  std::size_t line;
+  std::string id;
+  Vec6<double> q;
+  Pose<double> measured;
+};
+
+std::vector<Node> calibration_nodes(const Robot& nominal, const PoseTable& data) {
+  if (!data.has_measured)
+    throw InputError(data.file, 1, 0, "needs the measured pose columns mx,my,mz,mrx,mry,mrz to calibrate a 6-UPS");
+  std::vector<Node> nodes;
+  for (const PoseRow& r : data.rows) {
+    if (r.role != Role::Cal || !r.measured) continue;
+    Node n{r.line, r.id, Vec6<double>::Zero(), Pose<double>::from_xyz_rpy(*r.measured)};
+    if (r.q) {
+      n.q = r.q->head<6>();
+    } else {
+      const Status s = nominal.inverse(Pose<double>::from_xyz_rpy(r.commanded), n.q);
+      if (s != Status::Ok)
+        throw InputError(data.file, r.line, 0,
+                         "row '" + r.id + "': nominal IK of the commanded pose failed (" + to_string(s) +
+                             "); give the joint commands q1..q6 or drop the row");
+    }
+    nodes.push_back(n);
+  }
+  if (nodes.size() < 7)
+    throw InputError(data.file, 0, 0,
+                     "only " + std::to_string(nodes.size()) +
+                         " calibration nodes with a measured pose; the 42-parameter model needs at least 7 "
+                         "(6 equations each, seed 001 Section 3) and a well-spread set of poses");
+  return nodes;
+}
+
+// Rows of one node, weighted: rotations × L so both halves are in mm at the
+// platform (a rad and a mm are not commensurable otherwise).
+constexpr double kOrientationWeightMm = 200.0;
+
+}  // namespace
+
+StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data, const StewartCalibrationOptions& options) {
+  if (!nominal.is_stewart()) throw InputError("the seed 001 calibration is for 6-UPS (stewart-6ups) robots");
+  const std::vector<Node> nodes = calibration_nodes(nominal, data);
+  const int m = kStewartParameterCount;
+  const Eigen::Index n = Eigen::Index(6 * nodes.size());
+  const std::vector<std::string> names = parameter_names(nominal);
+
+  StewartCalibration out;
+  out.nodes = nodes.size();
+  out.theta = Eigen::VectorXd::Zero(m);
+  Eigen::MatrixXd H(n, m);
+  Eigen::VectorXd y(n);
+  for (int it = 0;; ++it) {
+    // Steps 3–4 / 7–8: poses of the machine as currently believed, and the
+    // residual pose errors dQ = QM − QC.
+    const StewartGeometry<double> g = stewart_with_errors(nominal.stewart(), out.theta);
+    StewartIteration rec;
+    rec.iteration = it;
+    double sum_p2 = 0;
+    for (std::size_t k = 0; k < nodes.size(); ++k) {
+      Pose<double> predicted;
+      const FkReport<double> r = stewart_fk(g, nodes[k].q, nodes[k].measured, predicted);
+      if (r.status != Status::Ok)
+        throw InputError(data.file, nodes[k].line, 0,
+                         "row '" + nodes[k].id + "': FK of the corrected machine failed (" + to_string(r.status) + ")");
+      const Twist<double> dq = pose_error(nodes[k].measured, predicted);
+      const Eigen::Index row = Eigen::Index(6 * k);
+      H.middleRows<6>(row) = stewart_error_jacobian(g, predicted);
+      y.segment<6>(row) = dq;
+      H.middleRows<3>(row + 3) *= kOrientationWeightMm;
+      y.segment<3>(row + 3) *= kOrientationWeightMm;
+      rec.max_dq_int = std::max(rec.max_dq_int, dq.head<3>().norm() + dq.tail<3>().norm());
+      sum_p2 += dq.head<3>().squaredNorm();
+    }
+    rec.rms_position_mm = std::sqrt(sum_p2 / double(nodes.size()));
+    if (it > 0) rec.step_norm = out.history.back().step_norm;
+    // Step 5: LS on column-scaled H (mm and dimensionless columns alike).
+    const Eigen::VectorXd scale = H.colwise().norm().transpose().cwiseMax(1e-300);
+    const Eigen::MatrixXd Hs = H * scale.cwiseInverse().asDiagonal();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Hs);
+    qr.setThreshold(1e-10);
+    if (qr.rank() < m) {
+      std::string which;
+      for (Eigen::Index j = qr.rank(); j < m; ++j)
+        which += (which.empty() ? "" : ", ") + names[std::size_t(qr.colsPermutation().indices()(j))];
+      throw InputError(data.file, 0, 0,
+                       "the calibration poses do not determine all 42 parameters (rank " + std::to_string(qr.rank()) +
+                           "); not identifiable: " + which +
+                           ". Spread the poses over more positions and orientations of the workspace");
+    }
+    const Eigen::VectorXd delta = scale.cwiseInverse().asDiagonal() * qr.solve(y);
+    const double rss = (y - H * delta).squaredNorm();
+    out.sigma_mm = std::sqrt(rss / double(std::max<Eigen::Index>(1, n - m)));
+    out.rank = int(qr.rank());
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Hs);
+    out.condition_number = svd.singularValues()(0) / svd.singularValues()(m - 1);
+    // Standard errors: σ²·(HsᵀHs)⁻¹ = σ²·P·R⁻¹R⁻ᵀ·Pᵀ, unscaled.
+    const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
+    const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(m, m));
+    out.standard_error.resize(m);
+    for (int j = 0; j < m; ++j) {
+      const Eigen::Index col = qr.colsPermutation().indices()(j);
+      out.standard_error(col) = out.sigma_mm * Rinv.row(j).norm() / scale(col);
+    }
+    rec.step_norm = delta.norm();
+    out.history.push_back(rec);
+    // Step 6 / 10: correct and repeat until the correction is negligible.
+    out.theta += delta;
+    if (delta.norm() <= options.step_tolerance * (1 + out.theta.norm()) || it + 1 >= options.max_iterations) break;
+  }
+  return out;
+}
+
+PoseErrorReport stewart_residuals(const Robot& nominal, const Robot& robot, const PoseTable& data) {
+  PoseTable predicted = data;  // "commanded" := the model's prediction, so pose_errors gives measured − predicted
+  for (PoseRow& r : predicted.rows) {
+    if (!r.measured) continue;
+    Vec6<double> q;
+    if (r.q) {
+      q = r.q->head<6>();
+    } else if (nominal.inverse(Pose<double>::from_xyz_rpy(r.commanded), q) != Status::Ok) {
+      r.measured.reset();  // counted as skipped
+      continue;
+    }
+    Pose<double> pose;
+    if (stewart_fk(robot.stewart(), q, Pose<double>::from_xyz_rpy(*r.measured), pose).status != Status::Ok) {
+      r.measured.reset();
+      continue;
+    }
+    r.commanded = pose.to_xyz_rpy();
+  }
+  return pose_errors(predicted);
+}
+
+CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& c, const std::string& data_file) {
+  CalibrationModel model;
+  model.nominal = nominal;
+  model.estimator = "ols";
+  model.settings["iterations"] = double(c.history.size());
+  model.settings["orientation_weight_mm"] = kOrientationWeightMm;
+  model.data_file = data_file;
+  const std::vector<std::string> names = parameter_names(nominal);
+  for (int j = 0; j < kStewartParameterCount; ++j)
+    model.parameters.push_back({names[std::size_t(j)], c.theta(j), c.standard_error(j), true});
+  return model;
+}
+
+}  // namespace kincal::identify
