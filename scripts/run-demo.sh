@@ -26,15 +26,37 @@ echo "   Nine rows agree to the paper's printed digits; A2 does not: the paper's
 echo "   inconsistent with its own model (docs/simulate.md, docs/reference-machines.md)."
 
 echo
-echo "== 2. hybrid-seed000: laser-tracker data of the polishing robot with hidden source errors"
+echo "== 2. stewart-seed001: the calibration loop (seed 001's method) on a workspace grid"
+echo "   hidden errors: Table 3; tracker noise 1 um, 5 urad; 27 calibration + 30 held-out poses"
+$kincal simulate --robot stewart-seed001 --poses examples/seed001/grid_poses.csv \
+  --errors examples/seed001/errors.csv --noise-mm 0.001 --noise-rad 0.000005 --seed 2026 \
+  --out out/seed001_grid_measured.csv
+$kincal identify --robot stewart-seed001 --data out/seed001_grid_measured.csv \
+  --out out/seed001_model.json --json out/seed001_summary.json
+grep -E '^(id|T)' examples/seed001/grid_poses.csv > out/seed001_test_poses.csv
+$kincal compensate --robot stewart-seed001 --model out/seed001_model.json \
+  --poses out/seed001_test_poses.csv --out out/seed001_test_joints.csv
+echo
+echo "   held-out poses on the erroneous machine, uncompensated (nominal IK):"
+$kincal simulate --robot stewart-seed001 --poses out/seed001_test_poses.csv \
+  --errors examples/seed001/errors.csv --out out/seed001_test_uncompensated.csv
+$kincal errors --data out/seed001_test_uncompensated.csv | tail -n +2
+echo
+echo "   the same poses with the compensated joint commands:"
+$kincal simulate --robot stewart-seed001 --poses out/seed001_test_joints.csv \
+  --errors examples/seed001/errors.csv --out out/seed001_test_compensated.csv
+$kincal errors --data out/seed001_test_compensated.csv | tail -n +2
+
+echo
+echo "== 3. hybrid-seed000: laser-tracker data of the polishing robot with hidden source errors"
 echo "   (3 layers x 7 x 7 nodes, pure translation, gauge targets, 5 um tracker noise)"
 $kincal simulate --robot hybrid-seed000 --poses examples/hybrid-seed000/poses.csv \
   --errors examples/hybrid-seed000/errors.csv --noise-mm 0.005 --noise-rad 0.000005 --seed 2026 \
   --out out/hybrid_measured.csv
 $kincal errors --data out/hybrid_measured.csv
 echo
-echo "   This is the uncalibrated machine as a laser tracker sees it. Identification,"
-echo "   diagnosis and compensation of these errors are the next stages of this job"
-echo "   (kincal identify / diagnose / compensate, issues #3-#5)."
+echo "   This is the uncalibrated hybrid as a laser tracker sees it. Its identification"
+echo "   (seed 000's coarse + fine calibration), the diagnosis of unmodelled effects and"
+echo "   the firmware tables are the next stages of this job (issues #3-#5)."
 echo
-echo "== measured data written to out/seed001_measured.csv and out/hybrid_measured.csv"
+echo "== outputs in out/: measurements, seed001_model.json, seed001_summary.json, compensated joints"

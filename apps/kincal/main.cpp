@@ -187,10 +187,14 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   ki::PoseTable out;
   out.file = out_path;
   out.has_q = true;
+  out.has_layer = poses.has_layer;
+  out.has_role = poses.has_role;
   std::size_t failed = 0;
   for (const ki::PoseRow& r : poses.rows) {
     ki::PoseRow o;
     o.id = r.id;
+    o.layer = r.layer;
+    o.role = r.role;
     o.commanded = r.commanded;
     kincal::Vec6<double> q;
     // seed 001's compensation: the IK of the corrected geometry.
