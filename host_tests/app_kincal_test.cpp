@@ -185,7 +185,7 @@ TEST(appKincal, ErrorsAreOneLineWithPosition) {
   {
     const ToolRun r = run_tool("simulate --robot nosuchrobot --poses \"" + poses + "\" --out \"" + kDir + "/x.csv\"");
     EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(contains(r.err, "kincal: nosuchrobot: cannot open file")) << r.err;
+    EXPECT_TRUE(contains(r.err, "kincal: nosuchrobot: neither a built-in robot")) << r.err;
   }
   {
     const ToolRun r = run_tool("simulate --robot stewart-seed001 --poses \"" + poses + "\" --out \"" + kDir +
