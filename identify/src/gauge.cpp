@@ -1,0 +1,92 @@
+#include "kincal/identify/gauge.hpp"
+
+#include <string>
+
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/simulate.hpp"
+
+namespace kincal::identify {
+
+Eigen::Matrix<double, 9, 6> gauge_map(const HybridGeometry<double>& g, double radius, const Pose<double>& nominal_tool) {
+  const Eigen::Matrix<double, 3, 3> t = gauge_targets(g, radius, nominal_tool);
+  Eigen::Matrix<double, 9, 6> M;
+  for (int j = 0; j < 3; ++j) {
+    // Δp_j = v + ω × (P_j − P) = v + [p̂_j×]·ω with p̂_j = P − P_j (P_j → P).
+    const Vec3<double> p_hat = nominal_tool.p - t.col(j);
+    M.block<3, 3>(3 * j, 0).setIdentity();
+    M.block<3, 3>(3 * j, 3) = skew(p_hat);
+  }
+  return M;
+}
+
+void measurement_map(MeasurementKind kind, const HybridGeometry<double>& g, double radius,
+                     const Pose<double>& nominal_tool, Eigen::MatrixXd& M) {
+  const int rows = measurement_rows(kind);
+  if (M.rows() != rows || M.cols() != 6) M.resize(rows, 6);
+  switch (kind) {
+    case MeasurementKind::GaugeTargets: M = gauge_map(g, radius, nominal_tool); break;
+    case MeasurementKind::FullPose: M.setIdentity(); break;
+    case MeasurementKind::Position:
+      M.setZero();
+      M.leftCols<3>().setIdentity();
+      break;
+  }
+}
+
+Eigen::VectorXd measurement_deviation(MeasurementKind kind, const HybridGeometry<double>& g, double radius,
+                                      const Pose<double>& actual_tool, const Pose<double>& nominal_tool) {
+  switch (kind) {
+    case MeasurementKind::GaugeTargets: {
+      const Eigen::Matrix<double, 3, 3> d =
+          gauge_targets(g, radius, actual_tool) - gauge_targets(g, radius, nominal_tool);
+      return Eigen::Map<const Eigen::Matrix<double, 9, 1>>(d.data());  // column-major: P1, P2, P3
+    }
+    case MeasurementKind::FullPose: return pose_error(actual_tool, nominal_tool);
+    case MeasurementKind::Position: return actual_tool.p - nominal_tool.p;
+  }
+  return {};
+}
+
+void identification_jacobian(const HybridErrorModel& model, MeasurementKind kind, double radius,
+                             const std::vector<Pose<double>>& nodes, Eigen::MatrixXd& H) {
+  const Eigen::Index r = measurement_rows(kind);
+  const Eigen::Index n = static_cast<Eigen::Index>(nodes.size());
+  if (H.rows() != r * n || H.cols() != model.size()) H.resize(r * n, model.size());
+  Eigen::MatrixXd B(6, model.size()), M(r, 6);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Pose<double>& node = nodes[static_cast<std::size_t>(k)];
+    const Status st = model.error_jacobian(node, B);
+    if (st != Status::Ok)
+      throw InputError("identification Jacobian: node " + std::to_string(k) + ": error model failed (" + to_string(st) +
+                       ")");
+    measurement_map(kind, model.nominal(), radius, node, M);
+    H.middleRows(k * r, r).noalias() = M * B;
+  }
+}
+
+Eigen::MatrixXd identification_jacobian(const HybridErrorModel& model, MeasurementKind kind, double radius,
+                                        const std::vector<Pose<double>>& nodes) {
+  Eigen::MatrixXd H;
+  identification_jacobian(model, kind, radius, nodes, H);
+  return H;
+}
+
+std::vector<Pose<double>> translation_grid(const std::vector<double>& layers, int L, double half_width,
+                                           const Mat3<double>& R) {
+  if (L < 1) throw InputError("translation grid: L must be at least 1");
+  std::vector<Pose<double>> out;
+  out.reserve(layers.size() * static_cast<std::size_t>(L * L));
+  for (double z : layers)
+    for (int iy = 0; iy < L; ++iy)
+      for (int ix = 0; ix < L; ++ix) {
+        const double sx = L == 1 ? 0.0 : -half_width + 2.0 * half_width * ix / (L - 1);
+        const double sy = L == 1 ? 0.0 : -half_width + 2.0 * half_width * iy / (L - 1);
+        Pose<double> p;
+        p.R = R;
+        p.p = Vec3<double>(sx, sy, z);
+        out.push_back(p);
+      }
+  return out;
+}
+
+}  // namespace kincal::identify
