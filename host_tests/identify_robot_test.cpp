@@ -135,7 +135,7 @@ TEST(identifyRobot, UnknownBuiltinOrMissingFile) {
     FAIL();
   } catch (const ki::InputError& e) {
     EXPECT_EQ(e.file(), "/nonexistent/robot.json");
-    EXPECT_NE(std::string(e.what()).find("cannot open file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nor a readable robot description file"), std::string::npos) << e.what();
   }
   EXPECT_THROW(ki::builtin_robot("stewart-seed002"), ki::InputError);
 }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/simulate.hpp"
@@ -223,4 +224,30 @@ TEST(identifySimulate, RejectsBadNoiseAndMixedFamilies) {
   bad.noise_mm = std::nan("");
   EXPECT_THROW(ki::simulate(s, s, in, bad, rep), ki::InputError);
   EXPECT_THROW(ki::simulate(s, h, in, {}, rep), ki::InputError);
+}
+
+// PARAMS.csv can carry seed 000's source errors; simulate then runs the
+// nonlinear chain model with every source error (identify/hybrid_error_model).
+TEST(identifySimulate, HybridSourceErrorsDriveTheChainModel) {
+  const ki::Robot nominal = ki::builtin_robot("hybrid-seed000");
+  const ki::ParameterSet errors =
+      ki::parse_parameters("name,value\ndxi_3_1,0.3\ndx_2_1,0.05\ndalpha_3_4,0.0002\n", "src.csv", nominal);
+  const ki::Robot actual = ki::apply_parameters(nominal, errors);
+  ASSERT_EQ(actual.source_errors.size(), ki::HybridErrorModel::kParameterCount);
+  const ki::HybridErrorModel model(nominal.hybrid());
+  EXPECT_EQ(actual.source_errors(model.index_of("dx_2_1")), 0.05);
+  const ki::PoseTable poses = ki::parse_pose_table("id,x,y,z,rx,ry,rz\na,100,-50,20,0,0,0\n", "p.csv");
+  ki::SimulateReport rep;
+  const ki::PoseTable out = ki::simulate(nominal, actual, poses, ki::SimulateOptions{}, rep);
+  ASSERT_TRUE(out.rows[0].measured);
+  // The same as calling the chain model directly on the nominal IK's commands.
+  kincal::Vec6<double> q;
+  kincal::HybridPassive<double> s;
+  ASSERT_EQ(kincal::hybrid_ik(nominal.hybrid(), kincal::Pose<double>::from_xyz_rpy(poses.rows[0].commanded), q, nullptr, &s),
+            kincal::Status::Ok);
+  kincal::Pose<double> direct;
+  ASSERT_EQ(model.actual_fk(actual.source_errors, q, s, direct).status, kincal::Status::Ok);
+  EXPECT_LT((kincal::Pose<double>::from_xyz_rpy(*out.rows[0].measured).p - direct.p).norm(), 1e-9);
+  // And the errors are felt: the encoder offset alone moves the tool ~0.3 mm.
+  EXPECT_GT((direct.p - kincal::Pose<double>::from_xyz_rpy(poses.rows[0].commanded).p).norm(), 0.1);
 }

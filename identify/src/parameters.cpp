@@ -4,7 +4,9 @@
 #include <cmath>
 #include <map>
 
+#include "kincal/core/reference_machines.hpp"
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -59,6 +61,16 @@ std::vector<ParameterSpec> hybrid_table() {
   t.push_back({"d_platform_to_wrist", "mm", "|A64 Q|", [](Robot& r, double v) { r.hybrid().platform_to_wrist += v; }});
   t.push_back({"d_wrist_link", "mm", "|Q P0|", [](Robot& r, double v) { r.hybrid().wrist_link += v; }});
   t.push_back({"d_tool_length", "mm", "|P0 P|", [](Robot& r, double v) { r.hybrid().tool_length += v; }});
+  // seed 000's complete set of joint/link source errors (Appendix A), acting on
+  // the machine through the nonlinear chain model of hybrid_error_model.hpp.
+  const HybridErrorModel model(make_hybrid_seed000<double>());
+  for (const HybridErrorParameter& p : model.parameters()) {
+    const int index = model.index_of(p.name);
+    t.push_back({p.name, p.unit(), "seed 000 source error " + p.symbol, [index](Robot& r, double v) {
+                   if (r.source_errors.size() == 0) r.source_errors = Eigen::VectorXd::Zero(HybridErrorModel::kParameterCount);
+                   r.source_errors(index) += v;
+                 }});
+  }
   return t;
 }
 

@@ -1,8 +1,10 @@
 #include "kincal/identify/simulate.hpp"
 
 #include <cmath>
+#include <memory>
 #include <random>
 
+#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -28,7 +30,9 @@ struct RowResult {
   Pose<double> pose;
 };
 
-RowResult run_row(const Robot& nominal, const Robot& actual, const PoseRow& row) {
+// `sources`: the erroneous machine with seed 000's source errors (hybrid with
+// Robot::source_errors set), or null for the ideal chain of `actual`.
+RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorModel* sources, const PoseRow& row) {
   RowResult out;
   const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
   Vec6<double> q;
@@ -57,7 +61,8 @@ RowResult run_row(const Robot& nominal, const Robot& actual, const PoseRow& row)
     if (ik != Status::Ok) return out;
     q = q_ik;
   }
-  out.status = hybrid_fk(actual.hybrid(), q, passive, out.pose).status;
+  out.status = sources != nullptr ? sources->actual_fk(actual.source_errors, q, passive, out.pose).status
+                                  : hybrid_fk(actual.hybrid(), q, passive, out.pose).status;
   out.stage = "forward kinematics of the erroneous machine";
   return out;
 }
@@ -84,11 +89,13 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   out.has_status = false;
   out.ignored_columns.clear();
   report = SimulateReport{};
+  std::unique_ptr<HybridErrorModel> sources;
+  if (actual.is_hybrid() && actual.source_errors.size() > 0) sources = std::make_unique<HybridErrorModel>(actual.hybrid());
   for (PoseRow& row : out.rows) {
     row.measured.reset();
     row.targets.reset();
     row.status = "ok";
-    const RowResult r = run_row(nominal, actual, row);
+    const RowResult r = run_row(nominal, actual, sources.get(), row);
     if (r.status != Status::Ok) {
       row.status = to_string(r.status);
       out.has_status = true;

@@ -7,6 +7,8 @@
 #include <string>
 #include <variant>
 
+#include <Eigen/Core>
+
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
@@ -46,6 +48,10 @@ struct Robot {
   std::variant<StewartGeometry<double>, HybridGeometry<double>> geometry;
   double screw_lead = 5.0;     // mm per revolution, for the `cyclic` effect (GUIDE)
   double gauge_radius = 0.0;   // |P0 Pj| of the three-target gauge (hybrid only), mm
+  // Hybrid only: seed 000's joint/link source errors Δχ (150, in the order of
+  // HybridErrorModel, identify/hybrid_error_model.hpp), set from PARAMS.csv.
+  // Empty = none; then the machine is the (possibly modified) ideal geometry.
+  Eigen::VectorXd source_errors;
 
   bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
   bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }

@@ -1,0 +1,270 @@
+// Linear estimation for the regression model of seed 000 Eq. (10),
+//   Δp = H·Δχ + ε,   H: n × m identification Jacobian,
+// by ordinary least squares (OLS), ridge (Hoerl–Kennard), principal-components
+// regression (PCR) and the Liu estimator (seed 000 Eqs. (11)–(14)); row
+// weighting by the measurement covariance; outlier detection by deleted
+// residuals. docs/estimators.md gives the formulas, defaults and tolerances.
+//
+// Every estimator here is a *spectral filter* of the SVD H_w = U·S·Vᵀ of the
+// (row-whitened) design: x = V·diag(f_j / s_j)·Uᵀ·y_w with filter factors
+//   OLS f_j = 1,   ridge f_j = λ_j/(λ_j + k),   Liu f_j = (λ_j + d)/(λ_j + 1),
+//   PCR f_j = 1 for the kept components and 0 otherwise     (λ_j = s_j²),
+// so the normal equations HᵀH are never formed, and a Monte Carlo study that
+// keeps H fixed factors it once (PreparedDesign) and pays O(n·m) per run.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace kincal::identify {
+
+// Relative rank tolerance: a singular value of the column-scaled design (unit
+// column norms, see identifiability.hpp) counts as zero when
+// s_j ≤ rcond · s_max. A negative value selects the default max(n, m) · ε
+// (the LAPACK / NumPy matrix_rank convention).
+inline constexpr double kDefaultRcond = -1.0;
+double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols);
+
+struct LinearProblem {
+  Eigen::MatrixXd H;                       // n × m, rows are measurements, columns parameters
+  Eigen::VectorXd y;                       // n, measured minus nominal (Δp)
+  std::optional<Eigen::VectorXd> weights;  // n, 1/σ_i² per row (relative weights are fine)
+  std::vector<std::string> names;          // m parameter names, or empty ("x0", "x1", ...)
+  // Optional row → node map (a node contributes 3, 6 or 9 rows); used by the
+  // outlier test and by without_nodes(). Empty: every row is its own node.
+  std::vector<Eigen::Index> row_node;
+};
+
+// Sizes, finiteness (NaN/Inf name the row and column), weights > 0, n > m.
+// Throws InputError.
+void validate(const LinearProblem& problem);
+
+// names[j], or "x<j>" when the problem has no names.
+std::string column_name(const LinearProblem& problem, Eigen::Index j);
+
+// ---- weighting (row whitening) -------------------------------------------
+
+// Rows scaled by √w_i (w_i = 1/σ_i²): H_w = W^{1/2} H, y_w = W^{1/2} y. The
+// result has no weights. Estimators apply this themselves when weights are set.
+LinearProblem whitened(const LinearProblem& problem);
+
+// A full measurement covariance for a group of rows (e.g. one node's 3×3
+// target covariance or 9×9 three-target covariance).
+struct BlockCovariance {
+  std::vector<Eigen::Index> rows;  // row indices of the block, each row in at most one block
+  Eigen::MatrixXd covariance;      // rows.size() × rows.size(), symmetric positive definite
+};
+
+// Cholesky whitening: for each block Σ = L·Lᵀ, the block's rows become
+// L⁻¹·H_B and L⁻¹·y_B. Rows in no block keep their diagonal weight (or 1).
+// Throws InputError on a non-SPD covariance, a bad row index or a row listed twice.
+LinearProblem whitened(const LinearProblem& problem, const std::vector<BlockCovariance>& blocks);
+
+// Convenience: one covariance per node of problem.row_node, indexed by node id
+// (node_covariance[g] has as many rows as node g has rows, in row order).
+LinearProblem whitened_by_node(const LinearProblem& problem, const std::vector<Eigen::MatrixXd>& node_covariance);
+
+// ---- estimates -------------------------------------------------------------
+
+enum class LiuRule {
+  Eq14,         // seed 000 Eq. (14), clamped to [0, 1]  (the default)
+  MinimiseMse,  // numeric minimum of the Eq. (13) MSE over [0, 1] (golden section)
+  Fixed,        // the caller's d
+};
+
+struct LiuOptions {
+  LiuRule rule = LiuRule::Eq14;
+  double d = 0.5;  // used by LiuRule::Fixed; must be finite
+};
+
+struct PcrOptions {
+  // Precedence: components > 0; else variance_fraction in (0, 1]; else
+  // the condition-index cut (keep s_j ≥ s_max / max_condition_index).
+  Eigen::Index components = 0;
+  double variance_fraction = 0.0;  // fraction of Σ s_j² to retain
+  double max_condition_index = 1e3;
+};
+
+struct Estimate {
+  std::string method;               // "ols", "ridge", "pcr", "liu"
+  std::vector<std::string> names;   // parameter names (column_name of each column)
+  Eigen::VectorXd x;                // the estimate Δχ̂
+  // Sampling standard deviation of each x_j: √(σ̂²_u · [V diag(f²/s²) Vᵀ]_jj).
+  // For OLS the usual σ̂²(HᵀH)⁻¹ diagonal; for ridge / Liu / PCR the spread at
+  // the chosen k / d / components taken as fixed (bias not included).
+  Eigen::VectorXd standard_error;
+  Eigen::VectorXd residual;         // y − H·x in the problem's own units (not whitened)
+  double rss = 0;                   // whitened residual sum of squares of this estimate
+  // Noise variance from the OLS (minimum-norm LS) fit of the whitened problem:
+  //   sigma2          = RSS_OLS / n            seed 000 Eq. (13) as written; used in Eqs. (13)–(14)
+  //   sigma2_unbiased = RSS_OLS / (n − rank)   used for standard errors, the
+  //                                            Hoerl–Kennard–Baldwin k and outlier tests
+  double sigma2 = 0;
+  double sigma2_unbiased = 0;
+  Eigen::Index rows = 0;
+  Eigen::Index rank = 0;
+  double condition_number = 0;      // s_max / s_min of the whitened, unscaled H (components used)
+  // settings actually used
+  double ridge_k = 0;
+  bool ridge_k_default = false;     // k chosen by Hoerl–Kennard–Baldwin
+  double liu_d = 1;
+  double liu_d_unclamped = 1;       // Eq. (14) value before clamping to [0, 1]
+  bool liu_d_clamped = false;
+  LiuRule liu_rule = LiuRule::Eq14;
+  Eigen::Index pcr_components = 0;
+};
+
+// OLS by the SVD of the whitened design (rank judged on the column-scaled
+// design with effective_rcond(rcond)). A rank-deficient design throws
+// InputError naming the columns that are not identifiable and the null-space
+// combination(s) (identifiability.hpp null_space_combinations).
+Estimate ols(const LinearProblem& problem, double rcond = kDefaultRcond);
+
+// Hoerl–Kennard ridge, x = (HᵀH + k I)⁻¹ Hᵀ y, by SVD filter factors.
+// k = nullopt: Hoerl–Kennard–Baldwin k = m·σ̂²_u / ‖x̂_OLS‖² (needs full rank).
+// An explicit k > 0 also works on a rank-deficient design; k = 0 is OLS.
+Estimate ridge(const LinearProblem& problem, std::optional<double> k = std::nullopt,
+               double rcond = kDefaultRcond);
+
+// Principal-components regression on the SVD of the whitened (unscaled) H.
+// Works on rank-deficient designs (at most `rank` components are used).
+Estimate principal_components(const LinearProblem& problem, const PcrOptions& options = {},
+                              double rcond = kDefaultRcond);
+
+// Liu estimator, seed 000 Eq. (11): x_L = (HᵀH + I)⁻¹(Hᵀy + d·x̂_OLS), computed
+// as x_L = V·diag((λ_j + d)/(λ_j + 1))·α̂ with α̂ = Vᵀx̂_OLS (Eq. (12)). Needs full rank.
+Estimate liu(const LinearProblem& problem, const LiuOptions& options = {}, double rcond = kDefaultRcond);
+
+struct LiuParameter {
+  double d = 1;            // value used (clamped to [0, 1] unless LiuRule::Fixed)
+  double d_unclamped = 1;  // Eq. (14) value (or the Fixed d)
+  bool clamped = false;
+};
+LiuParameter liu_optimal_d(const LinearProblem& problem, LiuRule rule = LiuRule::Eq14,
+                           double rcond = kDefaultRcond);
+
+// The scalar pieces of seed 000 Eqs. (13)–(14) in the eigenbasis of HᵀH
+// (λ_j = s_j², α̂_j = (Φᵀx̂)_j, σ̂² of Eq. (13)); exposed for tests and reports.
+double liu_mse_eq13(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2, double d);
+double liu_d_eq14(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2);
+// Golden-section minimum of liu_mse_eq13 over [lo, hi] (to ~1e-10 relative).
+double liu_d_minimise_mse(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2,
+                          double lo = 0.0, double hi = 1.0);
+
+// ---- factor once, solve many (Monte Carlo) --------------------------------
+
+// Caller-owned scratch for PreparedDesign solves; allocation-free after the
+// first solve with a given design size.
+struct FitWorkspace {
+  Eigen::VectorXd yw, c, r, coef;
+};
+
+struct FitInfo {
+  double rss = 0;              // whitened RSS of this fit
+  double sigma2 = 0;           // RSS_OLS / n          (Eq. (13))
+  double sigma2_unbiased = 0;  // RSS_OLS / (n − rank)
+  double d = 1, d_unclamped = 1;
+  bool d_clamped = false;
+  double k = 0;
+};
+
+// The SVD H_w = U S Vᵀ of the whitened design, computed once. Each solve
+// projects a new y (c = Uᵀ y_w, residual y_w − U c): O(n·m) per run. The
+// object is immutable; concurrent solves from several threads are safe with
+// one FitWorkspace per thread.
+class PreparedDesign {
+ public:
+  struct Options {
+    double rcond = kDefaultRcond;
+    bool require_full_rank = true;  // false: allow PCR / ridge (k > 0) on a deficient design
+  };
+  // Uses problem.H, weights and names (problem.y is not needed and may be empty).
+  explicit PreparedDesign(const LinearProblem& problem, Options options);
+  explicit PreparedDesign(const LinearProblem& problem) : PreparedDesign(problem, Options{}) {}
+
+  Eigen::Index rows() const { return U_.rows(); }
+  Eigen::Index cols() const { return V_.rows(); }
+  Eigen::Index rank() const { return rank_; }
+  bool full_rank() const { return rank_ == cols(); }
+  const Eigen::MatrixXd& U() const { return U_; }  // n × m (thin)
+  const Eigen::MatrixXd& V() const { return V_; }  // m × m
+  const Eigen::VectorXd& singular_values() const { return s_; }  // of the whitened, unscaled H
+  double condition_number() const;
+  const std::vector<std::string>& names() const { return names_; }
+  // "" when full rank; otherwise the rank-deficiency message (columns and
+  // null-space combinations), as thrown by ols().
+  const std::string& deficiency() const { return deficiency_; }
+
+  // OLS (throws InputError with the deficiency message on a deficient design).
+  FitInfo ols(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws) const;
+  FitInfo liu(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws, const LiuOptions& options = {}) const;
+  FitInfo ridge(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws,
+                std::optional<double> k = std::nullopt) const;
+  // PCR with the first `components` (≤ rank) principal components.
+  FitInfo pcr(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws, Eigen::Index components) const;
+  // Number of components PcrOptions selects on this design.
+  Eigen::Index pcr_components(const PcrOptions& options) const;
+
+  // √(σ² · [V diag(f_j²/s_j²) Vᵀ]_jj) for filter factors f (size ≥ rank; entries
+  // beyond rank ignored).
+  Eigen::VectorXd standard_errors(const Eigen::VectorXd& filter, double sigma2) const;
+
+ private:
+  // c = Uᵀ y_w for the rank used, residual of the OLS fit; returns RSS_OLS.
+  double project(const Eigen::VectorXd& y, FitWorkspace& ws) const;
+  FitInfo finish(FitWorkspace& ws, Eigen::VectorXd& x, double rss_ols) const;
+  void require_full_rank() const;
+
+  Eigen::MatrixXd U_, V_;
+  Eigen::VectorXd s_;
+  Eigen::VectorXd sqrt_w_;  // empty: unweighted
+  Eigen::Index rank_ = 0;
+  std::vector<std::string> names_;
+  std::string deficiency_;
+};
+
+// ---- outliers --------------------------------------------------------------
+
+struct OutlierOptions {
+  // Family-wise false-alarm probability on clean data, Bonferroni-corrected
+  // over the testable nodes: node g is outlying when its deletion p-value
+  // p_g < alpha / N.
+  double alpha = 0.01;
+};
+
+struct NodeStatistic {
+  Eigen::Index node = 0;   // node id from row_node (or the row index)
+  Eigen::Index rows = 0;   // rows of the node (3, 6, 9, ...)
+  // Deleted-node F statistic (Cook & Weisberg multi-case deletion):
+  //   Q = r_Gᵀ (I − P_GG)⁻¹ r_G,  F = (Q / p) / s²_(G),  s²_(G) = (RSS − Q)/(n − m − p),
+  // distributed F(p, n − m − p) on clean Gaussian data (P = hat matrix).
+  double f = 0;
+  double p_value = 1;      // single-test p-value P(F_{p,ν} > f)
+  double max_abs_t = 0;    // largest |deleted studentized residual| among the node's rows
+  bool testable = true;    // false when deleting the node loses rank (leverage 1) or dof
+  bool outlying = false;
+};
+
+struct OutlierReport {
+  Eigen::VectorXd deleted_t;            // per row: r_i / (s_(i) √(1 − h_ii)), t(n − m − 1) on clean data; NaN if h_ii ≈ 1
+  std::vector<NodeStatistic> nodes;     // ascending node id
+  std::vector<Eigen::Index> outlying_nodes;
+  double alpha = 0;
+  double p_threshold = 0;               // alpha / (number of testable nodes)
+  Eigen::Index testable_nodes = 0;
+};
+
+// Fits OLS on the whitened problem (full rank required) and tests each node.
+OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options = {},
+                              double rcond = kDefaultRcond);
+
+// The problem without the rows of `nodes` (node ids of row_node, or row
+// indices when row_node is empty). Weights and row_node are carried along.
+LinearProblem without_nodes(const LinearProblem& problem, const std::vector<Eigen::Index>& nodes);
+
+// Upper tail P(F_{d1,d2} > f) of Fisher's F distribution (regularized incomplete beta).
+double f_distribution_upper_tail(double f, double d1, double d2);
+
+}  // namespace kincal::identify

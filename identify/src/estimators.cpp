@@ -1,0 +1,689 @@
+// Linear estimators for seed 000 Eq. (10) as SVD filters; see estimators.hpp
+// and docs/estimators.md.
+#include "kincal/identify/estimators.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "kincal/identify/identifiability.hpp"
+#include "kincal/identify/input_error.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+std::string fmt(double v, const char* format = "%.4g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+std::string idx(Index i) { return std::to_string(i); }
+
+// Checks of everything but y.
+void validate_design(const LinearProblem& p) {
+  const Index n = p.H.rows(), m = p.H.cols();
+  if (n == 0 || m == 0) throw InputError("estimation: empty design matrix (" + idx(n) + " x " + idx(m) + ")");
+  if (!p.names.empty() && static_cast<Index>(p.names.size()) != m) {
+    throw InputError("estimation: " + std::to_string(p.names.size()) + " parameter names for " + idx(m) + " columns");
+  }
+  for (Index j = 0; j < m; ++j) {
+    for (Index i = 0; i < n; ++i) {
+      if (!std::isfinite(p.H(i, j))) {
+        throw InputError("estimation: design entry at row " + idx(i) + ", column '" + column_name(p, j) +
+                         "' is not finite");
+      }
+    }
+  }
+  if (p.weights) {
+    if (p.weights->size() != n) {
+      throw InputError("estimation: " + idx(p.weights->size()) + " weights for " + idx(n) + " rows");
+    }
+    for (Index i = 0; i < n; ++i) {
+      const double w = (*p.weights)(i);
+      if (!std::isfinite(w) || !(w > 0)) {
+        throw InputError("estimation: weight of row " + idx(i) + " is " + fmt(w) + " (must be finite and > 0)");
+      }
+    }
+  }
+  if (!p.row_node.empty() && static_cast<Index>(p.row_node.size()) != n) {
+    throw InputError("estimation: row_node has " + std::to_string(p.row_node.size()) + " entries for " + idx(n) +
+                     " rows");
+  }
+  if (n <= m) {
+    throw InputError("estimation: too few measurements, " + idx(n) + " rows for " + idx(m) +
+                     " parameters (need more rows than parameters to estimate the noise variance)");
+  }
+}
+
+void validate_y(const LinearProblem& p) {
+  if (p.y.size() != p.H.rows()) {
+    throw InputError("estimation: y has " + idx(p.y.size()) + " entries for " + idx(p.H.rows()) + " rows");
+  }
+  for (Index i = 0; i < p.y.size(); ++i) {
+    if (!std::isfinite(p.y(i))) throw InputError("estimation: measurement y at row " + idx(i) + " is not finite");
+  }
+}
+
+// Golden-section search of a unimodal f on [lo, hi].
+template <class F>
+double golden_min(F f, double lo, double hi) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = lo, b = hi;
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = f(c), fd = f(d);
+  for (int it = 0; it < 200 && (b - a) > 1e-12 * (1.0 + std::abs(a) + std::abs(b)); ++it) {
+    if (fc <= fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - g * (b - a);
+      fc = f(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + g * (b - a);
+      fd = f(d);
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+// Regularized incomplete beta I_x(a, b) by Lentz's continued fraction.
+double beta_cf(double a, double b, double x) {
+  const double tiny = 1e-300;
+  double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0);
+  if (std::abs(d) < tiny) d = tiny;
+  d = 1.0 / d;
+  double h = d;
+  for (int k = 1; k <= 500; ++k) {
+    const double kk = static_cast<double>(k);
+    double num = kk * (b - kk) * x / ((a + 2 * kk - 1) * (a + 2 * kk));
+    d = 1.0 + num * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1.0 + num / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1.0 / d;
+    h *= d * c;
+    num = -(a + kk) * (a + b + kk) * x / ((a + 2 * kk) * (a + 2 * kk + 1));
+    d = 1.0 + num * d;
+    if (std::abs(d) < tiny) d = tiny;
+    c = 1.0 + num / c;
+    if (std::abs(c) < tiny) c = tiny;
+    d = 1.0 / d;
+    const double del = d * c;
+    h *= del;
+    if (std::abs(del - 1.0) < 1e-15) break;
+  }
+  return h;
+}
+
+double incomplete_beta(double a, double b, double x) {
+  if (x <= 0) return 0.0;
+  if (x >= 1) return 1.0;
+  const double lbt = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
+  if (x < (a + 1.0) / (a + b + 2.0)) return std::exp(lbt) * beta_cf(a, b, x) / a;
+  return 1.0 - std::exp(lbt) * beta_cf(b, a, 1.0 - x) / b;
+}
+
+}  // namespace
+
+double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols) {
+  if (rcond >= 0) return rcond;
+  return static_cast<double>(std::max(rows, cols)) * std::numeric_limits<double>::epsilon();
+}
+
+std::string column_name(const LinearProblem& problem, Eigen::Index j) {
+  if (!problem.names.empty() && j >= 0 && j < static_cast<Index>(problem.names.size())) {
+    return problem.names[static_cast<std::size_t>(j)];
+  }
+  return "x" + std::to_string(j);
+}
+
+void validate(const LinearProblem& problem) {
+  validate_design(problem);
+  validate_y(problem);
+}
+
+// ---- weighting ---------------------------------------------------------------
+
+LinearProblem whitened(const LinearProblem& problem) {
+  LinearProblem out = problem;
+  if (!problem.weights) return out;
+  validate_design(problem);
+  const VectorXd sw = problem.weights->cwiseSqrt();
+  out.H = sw.asDiagonal() * problem.H;
+  if (problem.y.size() == problem.H.rows()) out.y = sw.cwiseProduct(problem.y);
+  out.weights.reset();
+  return out;
+}
+
+LinearProblem whitened(const LinearProblem& problem, const std::vector<BlockCovariance>& blocks) {
+  const Index n = problem.H.rows();
+  // Rows outside every block keep their diagonal weight; rows inside take the
+  // block covariance instead (their diagonal weight is ignored).
+  LinearProblem out = whitened(problem);
+  std::vector<char> used(static_cast<std::size_t>(n), 0);
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    const BlockCovariance& blk = blocks[b];
+    const Index p = static_cast<Index>(blk.rows.size());
+    const std::string where = "covariance block " + std::to_string(b);
+    if (blk.covariance.rows() != p || blk.covariance.cols() != p) {
+      throw InputError(where + ": covariance is " + idx(blk.covariance.rows()) + " x " + idx(blk.covariance.cols()) +
+                       " for " + idx(p) + " rows");
+    }
+    for (Index i : blk.rows) {
+      if (i < 0 || i >= n) throw InputError(where + ": row " + idx(i) + " out of range (" + idx(n) + " rows)");
+      if (used[static_cast<std::size_t>(i)]) throw InputError(where + ": row " + idx(i) + " is in more than one block");
+      used[static_cast<std::size_t>(i)] = 1;
+    }
+    if (!blk.covariance.allFinite()) throw InputError(where + ": covariance is not finite");
+    const double scale = blk.covariance.cwiseAbs().maxCoeff();
+    if (!((blk.covariance - blk.covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale)) {
+      throw InputError(where + ": covariance is not symmetric");
+    }
+    Eigen::LLT<MatrixXd> llt(blk.covariance);
+    if (llt.info() != Eigen::Success || !(llt.matrixLLT().diagonal().minCoeff() > 0)) {
+      throw InputError(where + ": covariance is not positive definite");
+    }
+    MatrixXd Hb(p, problem.H.cols());
+    VectorXd yb(p);
+    const bool have_y = problem.y.size() == n;
+    for (Index r = 0; r < p; ++r) {
+      const Index i = blk.rows[static_cast<std::size_t>(r)];
+      Hb.row(r) = problem.H.row(i);
+      if (have_y) yb(r) = problem.y(i);
+    }
+    llt.matrixL().solveInPlace(Hb);
+    if (have_y) llt.matrixL().solveInPlace(yb);
+    for (Index r = 0; r < p; ++r) {
+      const Index i = blk.rows[static_cast<std::size_t>(r)];
+      out.H.row(i) = Hb.row(r);
+      if (have_y) out.y(i) = yb(r);
+    }
+  }
+  return out;
+}
+
+LinearProblem whitened_by_node(const LinearProblem& problem, const std::vector<Eigen::MatrixXd>& node_covariance) {
+  if (problem.row_node.size() != static_cast<std::size_t>(problem.H.rows())) {
+    throw InputError("whitening by node: the problem has no row_node map for its " + idx(problem.H.rows()) + " rows");
+  }
+  std::map<Index, std::vector<Index>> rows_of;
+  for (std::size_t i = 0; i < problem.row_node.size(); ++i) rows_of[problem.row_node[i]].push_back(static_cast<Index>(i));
+  std::vector<BlockCovariance> blocks;
+  for (auto& [node, rows] : rows_of) {
+    if (node < 0 || node >= static_cast<Index>(node_covariance.size())) {
+      throw InputError("whitening by node: no covariance for node " + idx(node));
+    }
+    blocks.push_back({rows, node_covariance[static_cast<std::size_t>(node)]});
+  }
+  return whitened(problem, blocks);
+}
+
+// ---- Liu parameter (seed 000 Eqs. (13), (14)) ------------------------------
+
+double liu_mse_eq13(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2, double d) {
+  double var = 0, bias = 0;
+  for (Index j = 0; j < lambda.size(); ++j) {
+    const double l = lambda(j), l1 = (l + 1) * (l + 1);
+    var += (l + d) * (l + d) / (l * l1);
+    bias += alpha_hat(j) * alpha_hat(j) / l1;
+  }
+  return sigma2 * var + (d - 1) * (d - 1) * bias;
+}
+
+double liu_d_eq14(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2) {
+  double num = 0, den = 0;
+  for (Index j = 0; j < lambda.size(); ++j) {
+    const double l = lambda(j), l1 = (l + 1) * (l + 1), a2 = alpha_hat(j) * alpha_hat(j);
+    num += (a2 - sigma2) / l1;
+    den += (sigma2 + l * a2) / (l * l1);
+  }
+  // den = 0 only with σ̂² = 0 and α̂ = 0: nothing to shrink, d = 1 (OLS).
+  return den > 0 ? num / den : 1.0;
+}
+
+double liu_d_minimise_mse(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2, double lo,
+                          double hi) {
+  return golden_min([&](double d) { return liu_mse_eq13(lambda, alpha_hat, sigma2, d); }, lo, hi);
+}
+
+namespace {
+
+// d from the projected data without forming vectors (a Monte Carlo run
+// stays allocation-free): λ_j = s_j², α̂_j = c_j / s_j (c = Uᵀy_w, α̂ = Vᵀx̂).
+struct ProjectedSpectrum {
+  const VectorXd& s;
+  const VectorXd& c;
+  double eq14(double sigma2) const {
+    double num = 0, den = 0;
+    for (Index j = 0; j < c.size(); ++j) {
+      const double l = s(j) * s(j), l1 = (l + 1) * (l + 1), a = c(j) / s(j), a2 = a * a;
+      num += (a2 - sigma2) / l1;
+      den += (sigma2 + l * a2) / (l * l1);
+    }
+    return den > 0 ? num / den : 1.0;
+  }
+  double mse(double sigma2, double d) const {
+    double var = 0, bias = 0;
+    for (Index j = 0; j < c.size(); ++j) {
+      const double l = s(j) * s(j), l1 = (l + 1) * (l + 1), a = c(j) / s(j);
+      var += (l + d) * (l + d) / (l * l1);
+      bias += a * a / l1;
+    }
+    return sigma2 * var + (d - 1) * (d - 1) * bias;
+  }
+};
+
+LiuParameter choose_d(const VectorXd& s, const VectorXd& c, double sigma2, const LiuOptions& opt) {
+  LiuParameter p;
+  if (opt.rule == LiuRule::Fixed) {
+    if (!std::isfinite(opt.d)) throw InputError("Liu: fixed d is not finite");
+    p.d = p.d_unclamped = opt.d;
+    return p;
+  }
+  const ProjectedSpectrum spec{s, c};
+  p.d_unclamped = spec.eq14(sigma2);
+  if (opt.rule == LiuRule::Eq14) {
+    p.d = std::clamp(p.d_unclamped, 0.0, 1.0);
+    p.clamped = p.d != p.d_unclamped;
+  } else {
+    // The MSE is a convex quadratic in d, so its minimum on [0, 1] is the
+    // clamped Eq. (14) value; the unclamped one is reported for comparison.
+    p.d = golden_min([&](double d) { return spec.mse(sigma2, d); }, 0.0, 1.0);
+    p.clamped = p.d_unclamped < 0.0 || p.d_unclamped > 1.0;
+  }
+  return p;
+}
+
+}  // namespace
+
+// ---- PreparedDesign ----------------------------------------------------------
+
+PreparedDesign::PreparedDesign(const LinearProblem& problem, Options options) {
+  validate_design(problem);
+  const Index n = problem.H.rows(), m = problem.H.cols();
+  for (Index j = 0; j < m; ++j) names_.push_back(column_name(problem, j));
+  MatrixXd Hw;
+  if (problem.weights) {
+    sqrt_w_ = problem.weights->cwiseSqrt();
+    Hw = sqrt_w_.asDiagonal() * problem.H;
+  } else {
+    Hw = problem.H;
+  }
+  // Rank on the unit-norm columns (units differ between columns); the
+  // estimators themselves use the SVD of the unscaled whitened design, as
+  // seed 000 Eqs. (11)–(14) are written for it.
+  const RankReport rr = rank_by_svd(Hw, options.rcond, ColumnScaling::UnitNorm);
+  Eigen::BDCSVD<MatrixXd> svd(Hw, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  U_ = svd.matrixU();
+  V_ = svd.matrixV();
+  s_ = svd.singularValues();
+  rank_ = rr.rank;
+  // Guard against a design whose unscaled spectrum is degenerate although the
+  // scaled one is not (column norms differing by ~1/ε).
+  const double floor = static_cast<double>(std::max(n, m)) * std::numeric_limits<double>::epsilon() * s_(0);
+  Index unscaled = 0;
+  while (unscaled < s_.size() && s_(unscaled) > floor) ++unscaled;
+  if (rank_ == m && unscaled < m) {
+    rank_ = unscaled;
+    deficiency_ = "design is too badly scaled to solve: column norms span more than 1/eps (rescale the parameters)";
+  } else if (rank_ < m) {
+    rank_ = std::min(rank_, unscaled);
+    std::string cols, combos;
+    for (Index j : unidentifiable_columns(Hw, options.rcond)) {
+      if (!cols.empty()) cols += ", ";
+      cols += names_[static_cast<std::size_t>(j)];
+    }
+    for (const NullCombination& c : null_space_combinations(Hw, names_, options.rcond)) {
+      if (!combos.empty()) combos += "; ";
+      combos += "[" + c.text + "]";
+    }
+    deficiency_ = "rank-deficient design: rank " + idx(rr.rank) + " of " + idx(m) + " parameters (rcond " +
+                  fmt(rr.rcond, "%.3g") + " on unit-norm columns); not identifiable: " + cols +
+                  "; measurements do not change along " + combos;
+  }
+  if (options.require_full_rank && !deficiency_.empty()) throw InputError(deficiency_);
+}
+
+double PreparedDesign::condition_number() const {
+  if (rank_ == 0) return std::numeric_limits<double>::infinity();
+  return s_(0) / s_(rank_ - 1);
+}
+
+void PreparedDesign::require_full_rank() const {
+  if (!deficiency_.empty()) throw InputError(deficiency_);
+}
+
+double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const {
+  if (y.size() != rows()) {
+    throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
+  }
+  if (sqrt_w_.size() > 0) {
+    ws.yw = sqrt_w_.cwiseProduct(y);
+  } else {
+    ws.yw = y;
+  }
+  const auto Ur = U_.leftCols(rank_);
+  ws.c.resize(rank_);
+  ws.c.noalias() = Ur.transpose() * ws.yw;
+  ws.r = ws.yw;
+  ws.r.noalias() -= Ur * ws.c;
+  return ws.r.squaredNorm();
+}
+
+// x = V_r · coef; ws.coef holds f_j c_j / s_j on entry.
+FitInfo PreparedDesign::finish(FitWorkspace& ws, Eigen::VectorXd& x, double rss_ols) const {
+  x.resize(cols());
+  x.noalias() = V_.leftCols(rank_) * ws.coef;
+  FitInfo info;
+  const double n = static_cast<double>(rows());
+  info.sigma2 = rss_ols / n;
+  info.sigma2_unbiased = rss_ols / (n - static_cast<double>(rank_));
+  // RSS of a filtered fit: ‖y_w − U(f∘c)‖² = RSS_OLS + Σ (1 − f_j)² c_j²
+  // (the OLS residual is orthogonal to the columns of U).
+  double extra = 0;
+  for (Index j = 0; j < rank_; ++j) {
+    const double fitted = ws.coef(j) * s_(j);
+    extra += (ws.c(j) - fitted) * (ws.c(j) - fitted);
+  }
+  info.rss = rss_ols + extra;
+  return info;
+}
+
+FitInfo PreparedDesign::ols(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws) const {
+  require_full_rank();
+  const double rss = project(y, ws);
+  ws.coef = ws.c.cwiseQuotient(s_.head(rank_));
+  return finish(ws, x, rss);
+}
+
+FitInfo PreparedDesign::liu(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws,
+                            const LiuOptions& options) const {
+  require_full_rank();
+  const double rss = project(y, ws);
+  const double sigma2 = rss / static_cast<double>(rows());  // Eq. (13) σ̂² = RSS/n
+  const LiuParameter p = choose_d(s_, ws.c, sigma2, options);
+  // Eq. (11) in the eigenbasis (Eq. (12)): α_L,j = (λ_j + d)/(λ_j + 1) · α̂_j, α̂_j = c_j / s_j.
+  ws.coef.resize(rank_);
+  for (Index j = 0; j < rank_; ++j) {
+    const double l = s_(j) * s_(j);
+    ws.coef(j) = (l + p.d) / (l + 1.0) * ws.c(j) / s_(j);
+  }
+  FitInfo info = finish(ws, x, rss);
+  info.d = p.d;
+  info.d_unclamped = p.d_unclamped;
+  info.d_clamped = p.clamped;
+  return info;
+}
+
+FitInfo PreparedDesign::ridge(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws,
+                              std::optional<double> k) const {
+  if (k && (!std::isfinite(*k) || *k < 0)) throw InputError("ridge: k = " + fmt(*k) + " (must be finite and >= 0)");
+  if (!k || *k == 0) require_full_rank();
+  const double rss = project(y, ws);
+  double kk = 0;
+  if (k) {
+    kk = *k;
+  } else {
+    // Hoerl, Kennard & Baldwin (1975): k = m σ̂²_u / ‖x̂_OLS‖², ‖x̂‖² = Σ (c_j/s_j)².
+    double norm2 = 0;
+    for (Index j = 0; j < rank_; ++j) norm2 += (ws.c(j) / s_(j)) * (ws.c(j) / s_(j));
+    const double s2u = rss / static_cast<double>(rows() - rank_);
+    kk = norm2 > 0 ? static_cast<double>(cols()) * s2u / norm2 : 0.0;
+  }
+  ws.coef.resize(rank_);
+  for (Index j = 0; j < rank_; ++j) ws.coef(j) = s_(j) * ws.c(j) / (s_(j) * s_(j) + kk);  // f_j c_j / s_j
+  FitInfo info = finish(ws, x, rss);
+  info.k = kk;
+  return info;
+}
+
+FitInfo PreparedDesign::pcr(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws,
+                            Eigen::Index components) const {
+  if (components < 1 || components > rank_) {
+    throw InputError("PCR: " + idx(components) + " components requested; the design has rank " + idx(rank_));
+  }
+  const double rss = project(y, ws);
+  ws.coef = VectorXd::Zero(rank_);
+  ws.coef.head(components) = ws.c.head(components).cwiseQuotient(s_.head(components));
+  return finish(ws, x, rss);
+}
+
+Eigen::Index PreparedDesign::pcr_components(const PcrOptions& o) const {
+  if (o.components > 0) return o.components;
+  if (o.variance_fraction > 0) {
+    if (!(o.variance_fraction <= 1.0)) throw InputError("PCR: variance fraction " + fmt(o.variance_fraction) + " > 1");
+    const double total = s_.head(rank_).squaredNorm();
+    double acc = 0;
+    for (Index j = 0; j < rank_; ++j) {
+      acc += s_(j) * s_(j);
+      if (acc >= o.variance_fraction * total * (1 - 1e-15)) return j + 1;
+    }
+    return rank_;
+  }
+  if (!(o.max_condition_index >= 1)) throw InputError("PCR: max condition index " + fmt(o.max_condition_index) + " < 1");
+  Index k = 0;
+  while (k < rank_ && s_(k) * o.max_condition_index >= s_(0)) ++k;
+  return std::max<Index>(k, 1);
+}
+
+Eigen::VectorXd PreparedDesign::standard_errors(const Eigen::VectorXd& filter, double sigma2) const {
+  const VectorXd g = filter.head(rank_).cwiseQuotient(s_.head(rank_)).cwiseAbs2();  // f_j² / s_j²
+  VectorXd var = V_.leftCols(rank_).cwiseAbs2() * g;
+  return (sigma2 * var).cwiseSqrt();
+}
+
+// ---- one-shot estimators -------------------------------------------------------
+
+namespace {
+
+Estimate make_estimate(const PreparedDesign& design, const LinearProblem& problem, std::string method, VectorXd x,
+                       const FitInfo& info, const VectorXd& filter) {
+  Estimate e;
+  e.method = std::move(method);
+  e.names = design.names();
+  e.residual = problem.y - problem.H * x;
+  e.x = std::move(x);
+  e.rss = info.rss;
+  e.sigma2 = info.sigma2;
+  e.sigma2_unbiased = info.sigma2_unbiased;
+  e.rows = design.rows();
+  e.rank = design.rank();
+  e.condition_number = design.condition_number();
+  e.standard_error = design.standard_errors(filter, info.sigma2_unbiased);
+  return e;
+}
+
+}  // namespace
+
+Estimate ols(const LinearProblem& problem, double rcond) {
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, true});
+  FitWorkspace ws;
+  VectorXd x;
+  const FitInfo info = design.ols(problem.y, x, ws);
+  return make_estimate(design, problem, "ols", std::move(x), info, VectorXd::Ones(design.rank()));
+}
+
+Estimate ridge(const LinearProblem& problem, std::optional<double> k, double rcond) {
+  validate(problem);
+  const bool need_full = !k || *k == 0;
+  const PreparedDesign design(problem, {rcond, need_full});
+  FitWorkspace ws;
+  VectorXd x;
+  const FitInfo info = design.ridge(problem.y, x, ws, k);
+  const VectorXd l = design.singular_values().head(design.rank()).array().square();
+  const VectorXd f = l.array() / (l.array() + info.k);
+  Estimate e = make_estimate(design, problem, "ridge", std::move(x), info, f);
+  e.ridge_k = info.k;
+  e.ridge_k_default = !k.has_value();
+  return e;
+}
+
+Estimate principal_components(const LinearProblem& problem, const PcrOptions& options, double rcond) {
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, false});
+  const Index comps = design.pcr_components(options);
+  FitWorkspace ws;
+  VectorXd x;
+  const FitInfo info = design.pcr(problem.y, x, ws, comps);
+  VectorXd f = VectorXd::Zero(design.rank());
+  f.head(comps).setOnes();
+  Estimate e = make_estimate(design, problem, "pcr", std::move(x), info, f);
+  e.pcr_components = comps;
+  return e;
+}
+
+Estimate liu(const LinearProblem& problem, const LiuOptions& options, double rcond) {
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, true});
+  FitWorkspace ws;
+  VectorXd x;
+  const FitInfo info = design.liu(problem.y, x, ws, options);
+  const VectorXd l = design.singular_values().head(design.rank()).array().square();
+  const VectorXd f = (l.array() + info.d) / (l.array() + 1.0);
+  Estimate e = make_estimate(design, problem, "liu", std::move(x), info, f);
+  e.liu_d = info.d;
+  e.liu_d_unclamped = info.d_unclamped;
+  e.liu_d_clamped = info.d_clamped;
+  e.liu_rule = options.rule;
+  return e;
+}
+
+LiuParameter liu_optimal_d(const LinearProblem& problem, LiuRule rule, double rcond) {
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, true});
+  FitWorkspace ws;
+  VectorXd x;
+  LiuOptions opt;
+  opt.rule = rule;
+  const FitInfo info = design.liu(problem.y, x, ws, opt);
+  return {info.d, info.d_unclamped, info.d_clamped};
+}
+
+// ---- outliers ---------------------------------------------------------------
+
+double f_distribution_upper_tail(double f, double d1, double d2) {
+  if (!(d1 > 0) || !(d2 > 0)) throw std::invalid_argument("F distribution: degrees of freedom must be > 0");
+  if (std::isnan(f)) return std::numeric_limits<double>::quiet_NaN();
+  if (f <= 0) return 1.0;
+  if (std::isinf(f)) return 0.0;
+  // P(F > f) = I_{d2/(d2 + d1 f)}(d2/2, d1/2)
+  return incomplete_beta(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f));
+}
+
+OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options, double rcond) {
+  validate(problem);
+  if (!(options.alpha > 0 && options.alpha < 1)) throw InputError("outliers: alpha " + fmt(options.alpha) + " not in (0, 1)");
+  const PreparedDesign design(problem, {rcond, true});
+  FitWorkspace ws;
+  VectorXd x;
+  const FitInfo info = design.ols(problem.y, x, ws);
+  const Index n = design.rows(), m = design.rank();
+  const VectorXd& r = ws.r;  // whitened OLS residuals
+  const double rss = info.rss;
+  const double nu = static_cast<double>(n - m);
+  const auto U = design.U().leftCols(m);
+  constexpr double kLeverageOne = 1e-10;  // 1 − h below this: the row alone fixes a direction
+
+  OutlierReport rep;
+  rep.alpha = options.alpha;
+  rep.deleted_t.resize(n);
+  for (Index i = 0; i < n; ++i) {
+    const double one_minus_h = 1.0 - U.row(i).squaredNorm();
+    const double s2 = (rss - r(i) * r(i) / one_minus_h) / (nu - 1.0);
+    if (one_minus_h < kLeverageOne || nu - 1.0 <= 0 || !(s2 > 0)) {
+      rep.deleted_t(i) = std::numeric_limits<double>::quiet_NaN();
+    } else {
+      rep.deleted_t(i) = r(i) / std::sqrt(s2 * one_minus_h);
+    }
+  }
+
+  std::map<Index, std::vector<Index>> rows_of;
+  for (Index i = 0; i < n; ++i) {
+    rows_of[problem.row_node.empty() ? i : problem.row_node[static_cast<std::size_t>(i)]].push_back(i);
+  }
+  for (const auto& [node, rows] : rows_of) {
+    NodeStatistic st;
+    st.node = node;
+    const Index p = static_cast<Index>(rows.size());
+    st.rows = p;
+    MatrixXd UG(p, m);
+    VectorXd rG(p);
+    for (Index a = 0; a < p; ++a) {
+      const Index i = rows[static_cast<std::size_t>(a)];
+      UG.row(a) = U.row(i);
+      rG(a) = r(i);
+      if (std::isfinite(rep.deleted_t(i))) st.max_abs_t = std::max(st.max_abs_t, std::abs(rep.deleted_t(i)));
+    }
+    // I − P_GG is the covariance (/σ²) of the node's residuals; singular when
+    // deleting the node would lose rank.
+    const MatrixXd A = MatrixXd::Identity(p, p) - UG * UG.transpose();
+    Eigen::LDLT<MatrixXd> ldlt(A);
+    const double nu_g = nu - static_cast<double>(p);
+    const double min_pivot = ldlt.vectorD().minCoeff();
+    if (ldlt.info() != Eigen::Success || !(min_pivot > kLeverageOne) || nu_g <= 0) {
+      st.testable = false;
+      st.f = std::numeric_limits<double>::quiet_NaN();
+      st.p_value = 1.0;
+    } else {
+      const double q = rG.dot(ldlt.solve(rG));
+      const double s2 = (rss - q) / nu_g;
+      st.f = s2 > 0 ? (q / static_cast<double>(p)) / s2 : std::numeric_limits<double>::infinity();
+      st.p_value = f_distribution_upper_tail(st.f, static_cast<double>(p), nu_g);
+      ++rep.testable_nodes;
+    }
+    rep.nodes.push_back(st);
+  }
+  rep.p_threshold = rep.testable_nodes > 0 ? options.alpha / static_cast<double>(rep.testable_nodes) : 0.0;
+  for (NodeStatistic& st : rep.nodes) {
+    st.outlying = st.testable && st.p_value < rep.p_threshold;
+    if (st.outlying) rep.outlying_nodes.push_back(st.node);
+  }
+  return rep;
+}
+
+LinearProblem without_nodes(const LinearProblem& problem, const std::vector<Eigen::Index>& nodes) {
+  const Index n = problem.H.rows();
+  const std::set<Index> drop(nodes.begin(), nodes.end());
+  std::set<Index> present;
+  std::vector<Index> keep;
+  for (Index i = 0; i < n; ++i) {
+    const Index node = problem.row_node.empty() ? i : problem.row_node[static_cast<std::size_t>(i)];
+    present.insert(node);
+    if (!drop.count(node)) keep.push_back(i);
+  }
+  for (Index node : drop) {
+    if (!present.count(node)) throw InputError("exclusion: node " + idx(node) + " is not in the problem");
+  }
+  LinearProblem out;
+  out.names = problem.names;
+  const Index k = static_cast<Index>(keep.size());
+  out.H.resize(k, problem.H.cols());
+  if (problem.y.size() == n) out.y.resize(k);
+  if (problem.weights) out.weights = VectorXd(k);
+  for (Index a = 0; a < k; ++a) {
+    const Index i = keep[static_cast<std::size_t>(a)];
+    out.H.row(a) = problem.H.row(i);
+    if (problem.y.size() == n) out.y(a) = problem.y(i);
+    if (problem.weights) (*out.weights)(a) = (*problem.weights)(i);
+    if (!problem.row_node.empty()) out.row_node.push_back(problem.row_node[static_cast<std::size_t>(i)]);
+  }
+  return out;
+}
+
+}  // namespace kincal::identify

@@ -1,0 +1,404 @@
+// Identifiability: rank, seed 000 Section 4.1 reconstructions, observability
+// indices, collinearity report. See identifiability.hpp and docs/estimators.md.
+#include "kincal/identify/identifiability.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+#include "kincal/identify/input_error.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+std::string name_of(const std::vector<std::string>& names, Index j) {
+  if (!names.empty() && j < static_cast<Index>(names.size())) return names[static_cast<std::size_t>(j)];
+  return "x" + std::to_string(j);
+}
+
+std::string fmt(double v, const char* format = "%.4g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+void check_design(const MatrixXd& H, const char* what) {
+  if (H.rows() == 0 || H.cols() == 0) {
+    throw InputError(std::string(what) + ": empty design matrix (" + std::to_string(H.rows()) + " x " +
+                     std::to_string(H.cols()) + ")");
+  }
+  for (Index j = 0; j < H.cols(); ++j) {
+    for (Index i = 0; i < H.rows(); ++i) {
+      if (!std::isfinite(H(i, j))) {
+        throw InputError(std::string(what) + ": design entry at row " + std::to_string(i) + ", column " +
+                         std::to_string(j) + " is not finite");
+      }
+    }
+  }
+}
+
+void check_names(const std::vector<std::string>& names, Index cols) {
+  if (!names.empty() && static_cast<Index>(names.size()) != cols) {
+    throw std::invalid_argument("identifiability: " + std::to_string(names.size()) + " names for " +
+                                std::to_string(cols) + " columns");
+  }
+}
+
+struct ScaledSvd {
+  VectorXd scale;  // D
+  VectorXd s;      // min(n, m) singular values of H·D⁻¹, descending
+  MatrixXd V;      // m × m (only when asked)
+  Index rank = 0;
+  double rcond = 0, tolerance = 0;
+};
+
+ScaledSvd scaled_svd(const MatrixXd& H, double rcond, ColumnScaling scaling, bool want_v) {
+  ScaledSvd out;
+  out.scale = column_scales(H, scaling);
+  const MatrixXd Hs = H * out.scale.cwiseInverse().asDiagonal();
+  if (want_v) {
+    Eigen::BDCSVD<MatrixXd> svd(Hs, Eigen::ComputeFullV);
+    out.s = svd.singularValues();
+    out.V = svd.matrixV();
+  } else {
+    Eigen::BDCSVD<MatrixXd> svd(Hs);
+    out.s = svd.singularValues();
+  }
+  out.rcond = effective_rcond(rcond, H.rows(), H.cols());
+  const double smax = out.s.size() > 0 ? out.s(0) : 0.0;
+  out.tolerance = out.rcond * smax;
+  out.rank = 0;
+  for (Index k = 0; k < out.s.size(); ++k) {
+    if (out.s(k) > out.tolerance && out.s(k) > 0) ++out.rank;
+  }
+  return out;
+}
+
+RankReport report_of(const ScaledSvd& sv, const MatrixXd& H, ColumnScaling scaling) {
+  RankReport r;
+  r.rows = H.rows();
+  r.cols = H.cols();
+  r.rank = sv.rank;
+  r.rcond = sv.rcond;
+  r.tolerance = sv.tolerance;
+  r.scaling = scaling;
+  r.column_scale = sv.scale;
+  r.singular_values = sv.s;
+  if (sv.rank < H.cols() || sv.s.size() == 0) {
+    r.condition_number = std::numeric_limits<double>::infinity();
+  } else {
+    r.condition_number = sv.s(0) / sv.s(sv.s.size() - 1);
+  }
+  return r;
+}
+
+// Reduced row echelon form of the k × m matrix A (rows: null-space basis
+// vectors in scaled coordinates), partial pivoting within each column, left to
+// right.
+void reduced_row_echelon(MatrixXd& A, std::vector<Index>& pivots) {
+  const Index k = A.rows(), m = A.cols();
+  Index row = 0;
+  pivots.clear();
+  for (Index j = 0; j < m && row < k; ++j) {
+    Index p = row;
+    for (Index i = row + 1; i < k; ++i) {
+      if (std::abs(A(i, j)) > std::abs(A(p, j))) p = i;
+    }
+    // Basis vectors have unit norm, so a pivot this small only reflects
+    // rounding; skip the column (it is expressed through later pivots).
+    if (std::abs(A(p, j)) <= 1e-6) continue;
+    A.row(row).swap(A.row(p));
+    A.row(row) /= A(row, j);
+    for (Index i = 0; i < k; ++i) {
+      if (i != row) A.row(i) -= A(i, j) * A.row(row);
+    }
+    pivots.push_back(j);
+    ++row;
+  }
+}
+
+std::vector<NullCombination> combinations_from(const ScaledSvd& sv, const std::vector<std::string>& names) {
+  std::vector<NullCombination> out;
+  const Index m = sv.V.rows();
+  const Index k = m - sv.rank;
+  if (k <= 0) return out;
+  MatrixXd A = sv.V.rightCols(k).transpose();  // k × m, orthonormal rows
+  std::vector<Index> pivots;
+  reduced_row_echelon(A, pivots);
+  for (Index row = 0; row < static_cast<Index>(pivots.size()); ++row) {
+    const double biggest = A.row(row).cwiseAbs().maxCoeff();
+    NullCombination c;
+    // scaled coordinates v (H·D⁻¹·v = 0) → original units D⁻¹·v
+    const Index lead = pivots[static_cast<std::size_t>(row)];
+    const double lead_value = A(row, lead) / sv.scale(lead);
+    std::string text;
+    for (Index j = 0; j < m; ++j) {
+      if (std::abs(A(row, j)) <= 1e-9 * biggest) continue;
+      const double coef = (A(row, j) / sv.scale(j)) / lead_value;
+      c.columns.push_back(j);
+      c.coefficients.push_back(coef);
+      if (!text.empty()) text += ' ';
+      text += (coef < 0 ? "-" : "+") + fmt(std::abs(coef)) + "*" + name_of(names, j);
+    }
+    c.text = text;
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+std::vector<Index> unidentifiable_from(const ScaledSvd& sv) {
+  std::vector<Index> out;
+  const Index m = sv.V.rows();
+  const Index k = m - sv.rank;
+  if (k <= 0) return out;
+  for (Index j = 0; j < m; ++j) {
+    if (sv.V.row(j).tail(k).norm() > 1e-7) out.push_back(j);
+  }
+  return out;
+}
+
+}  // namespace
+
+Eigen::VectorXd column_scales(const Eigen::MatrixXd& H, ColumnScaling scaling) {
+  VectorXd d = VectorXd::Ones(H.cols());
+  if (scaling == ColumnScaling::UnitNorm) {
+    for (Index j = 0; j < H.cols(); ++j) {
+      const double n = H.col(j).norm();
+      if (n > 0 && std::isfinite(n)) d(j) = n;
+    }
+  }
+  return d;
+}
+
+RankReport rank_by_svd(const Eigen::MatrixXd& H, double rcond, ColumnScaling scaling) {
+  check_design(H, "rank");
+  return report_of(scaled_svd(H, rcond, scaling, false), H, scaling);
+}
+
+ColumnSelection reconstruct_by_column_selection(const Eigen::MatrixXd& H, const std::vector<Index>& xi,
+                                                const std::vector<Index>& eta,
+                                                const std::vector<std::string>& names, double tolerance) {
+  check_design(H, "reconstruction");
+  check_names(names, H.cols());
+  const Index n = H.rows(), m = H.cols();
+  std::vector<char> seen(static_cast<std::size_t>(m), 0);
+  for (const auto* set : {&xi, &eta}) {
+    for (Index j : *set) {
+      if (j < 0 || j >= m) throw std::invalid_argument("reconstruction: column index " + std::to_string(j) + " out of range");
+      if (seen[static_cast<std::size_t>(j)]) {
+        throw std::invalid_argument("reconstruction: column " + std::to_string(j) + " listed twice");
+      }
+      seen[static_cast<std::size_t>(j)] = 1;
+    }
+  }
+  ColumnSelection out;
+  out.tolerance = tolerance >= 0 ? tolerance
+                                 : effective_rcond(kDefaultRcond, n, m) * std::sqrt(static_cast<double>(m));
+  MatrixXd Q(n, std::min(n, static_cast<Index>(xi.size() + eta.size())));
+  Index q = 0;
+  VectorXd r(n);
+  // Distance of the unit column h_j from span(Q), classical Gram–Schmidt run
+  // twice ("twice is enough", Giraud et al.) so the basis stays orthonormal.
+  auto distance = [&](Index j) -> double {
+    const double norm = H.col(j).norm();
+    if (norm == 0) return 0.0;
+    r = H.col(j) / norm;
+    for (int pass = 0; pass < 2 && q > 0; ++pass) {
+      const VectorXd proj = Q.leftCols(q).transpose() * r;
+      r.noalias() -= Q.leftCols(q) * proj;
+    }
+    return r.norm();
+  };
+  auto append = [&](double dist) {
+    Q.col(q) = r / dist;
+    ++q;
+  };
+  for (Index j : xi) {
+    const double dist = q < n ? distance(j) : 0.0;
+    if (!(dist > out.tolerance)) {
+      throw InputError("reconstruction: actuated-joint column '" + name_of(names, j) +
+                       "' is dependent on the other actuated-joint columns (distance " + fmt(dist) +
+                       " from their span): singular configuration or duplicated joint; H_xi must have full rank "
+                       "(seed 000 Sec. 4.1)");
+    }
+    append(dist);
+    out.kept.push_back(j);
+  }
+  for (Index j : eta) {
+    const double dist = q < n ? distance(j) : 0.0;
+    out.distance.push_back(dist);
+    if (dist > out.tolerance) {  // rank([H h]) = rank(H) + 1: Step 2 keeps it
+      append(dist);
+      out.kept.push_back(j);
+    } else {
+      out.dropped.push_back(j);
+    }
+  }
+  out.rank = q;
+  for (Index j : out.kept) out.kept_names.push_back(name_of(names, j));
+  for (Index j : out.dropped) out.dropped_names.push_back(name_of(names, j));
+  return out;
+}
+
+SpectralReduction spectral_reduction(const Eigen::MatrixXd& H, double rcond, ColumnScaling scaling) {
+  check_design(H, "spectral reduction");
+  const ScaledSvd sv = scaled_svd(H, rcond, scaling, true);
+  SpectralReduction out;
+  out.rank = sv.rank;
+  out.rank_report = report_of(sv, H, scaling);
+  out.singular_values = sv.s.head(sv.rank);
+  // H·D⁻¹ = U S Vᵀ → Δχ = D⁻¹ V₁ Δα, Z₁ = H D⁻¹ V₁ = U₁ S₁.
+  out.phi1 = sv.scale.cwiseInverse().asDiagonal() * sv.V.leftCols(sv.rank);
+  out.z1 = H * out.phi1;
+  return out;
+}
+
+ObservabilityIndices observability_indices(const Eigen::VectorXd& s, Index rows) {
+  ObservabilityIndices o;
+  const Index m = s.size();
+  if (m == 0 || rows <= 0) return o;
+  const double smax = s.maxCoeff(), smin = s.minCoeff();
+  if (smin > 0) {
+    o.o1 = std::exp(s.array().log().mean()) / std::sqrt(static_cast<double>(rows));
+    o.o5 = 1.0 / s.cwiseInverse().sum();
+  }
+  o.o2 = smax > 0 ? smin / smax : 0.0;
+  o.o3 = smin;
+  o.o4 = smax > 0 ? smin * smin / smax : 0.0;
+  return o;
+}
+
+ObservabilityIndices observability_indices(const Eigen::MatrixXd& H, ColumnScaling scaling) {
+  check_design(H, "observability");
+  const ScaledSvd sv = scaled_svd(H, kDefaultRcond, scaling, false);
+  VectorXd s = VectorXd::Zero(H.cols());  // n < m: the missing singular values are 0
+  s.head(sv.s.size()) = sv.s;
+  return observability_indices(s, H.rows());
+}
+
+std::vector<NullCombination> null_space_combinations(const Eigen::MatrixXd& H, const std::vector<std::string>& names,
+                                                     double rcond) {
+  check_design(H, "null space");
+  check_names(names, H.cols());
+  return combinations_from(scaled_svd(H, rcond, ColumnScaling::UnitNorm, true), names);
+}
+
+std::vector<Index> unidentifiable_columns(const Eigen::MatrixXd& H, double rcond) {
+  check_design(H, "null space");
+  return unidentifiable_from(scaled_svd(H, rcond, ColumnScaling::UnitNorm, true));
+}
+
+CollinearityReport collinearity_report(const Eigen::MatrixXd& H, const std::vector<std::string>& names,
+                                       const CollinearityOptions& options) {
+  check_design(H, "collinearity");
+  check_names(names, H.cols());
+  const Index m = H.cols();
+  const ScaledSvd sv = scaled_svd(H, options.rcond, ColumnScaling::UnitNorm, true);
+  CollinearityReport rep;
+  rep.rank = report_of(sv, H, ColumnScaling::UnitNorm);
+  for (Index j = 0; j < m; ++j) rep.names.push_back(name_of(names, j));
+  const Index r = sv.rank;
+  rep.unidentifiable = unidentifiable_from(sv);
+  rep.null_space = combinations_from(sv, names);
+  std::vector<char> unident(static_cast<std::size_t>(m), 0);
+  for (Index j : rep.unidentifiable) unident[static_cast<std::size_t>(j)] = 1;
+
+  // φ_jk = V_jk² / s_k² over the identified components (Belsley, Kuh & Welsch 1980).
+  MatrixXd phi(m, r);
+  for (Index k = 0; k < r; ++k) phi.col(k) = sv.V.col(k).array().square() / (sv.s(k) * sv.s(k));
+  rep.vif.resize(m);
+  rep.variance_proportions.resize(m, r);
+  for (Index j = 0; j < m; ++j) {
+    const double total = phi.row(j).sum();
+    rep.vif(j) = unident[static_cast<std::size_t>(j)] ? std::numeric_limits<double>::infinity() : total;
+    rep.variance_proportions.row(j) = total > 0 ? (phi.row(j) / total).eval() : Eigen::RowVectorXd::Zero(r).eval();
+  }
+  rep.condition_indices.resize(r);
+  for (Index k = 0; k < r; ++k) rep.condition_indices(k) = sv.s(0) / sv.s(k);
+
+  auto hint_for = [&](const std::string& name) { return options.hint ? options.hint(name) : std::string(); };
+
+  // Not identifiable: the null space, named.
+  for (Index j : rep.unidentifiable) {
+    ParameterNote note;
+    note.column = j;
+    note.name = rep.names[static_cast<std::size_t>(j)];
+    std::string combos;
+    for (const NullCombination& c : rep.null_space) {
+      if (std::find(c.columns.begin(), c.columns.end(), j) == c.columns.end()) continue;
+      if (!combos.empty()) combos += "; ";
+      combos += "[" + c.text + "]";
+    }
+    note.text = note.name + " is not identifiable: the measurements do not change along " +
+                (combos.empty() ? std::string("a null-space direction") : combos);
+    note.hint = hint_for(note.name);
+    rep.notes.push_back(std::move(note));
+  }
+  // Confounded: ≥ 2 parameters with proportion > threshold on one component
+  // whose condition index exceeds the threshold.
+  for (Index k = 0; k < r; ++k) {
+    if (!(rep.condition_indices(k) > options.condition_index_threshold)) continue;
+    ConfoundedGroup g;
+    g.component = k;
+    g.condition_index = rep.condition_indices(k);
+    for (Index j = 0; j < m; ++j) {
+      if (unident[static_cast<std::size_t>(j)]) continue;
+      if (rep.variance_proportions(j, k) > options.proportion_threshold) {
+        g.columns.push_back(j);
+        g.proportions.push_back(rep.variance_proportions(j, k));
+      }
+    }
+    if (g.columns.size() < 2) continue;
+    for (std::size_t a = 0; a < g.columns.size(); ++a) {
+      ParameterNote note;
+      note.column = g.columns[a];
+      note.name = rep.names[static_cast<std::size_t>(g.columns[a])];
+      std::string others, props;
+      for (std::size_t b = 0; b < g.columns.size(); ++b) {
+        if (!props.empty()) props += ", ";
+        props += fmt(g.proportions[b], "%.2f");
+        if (b == a) continue;
+        if (!others.empty()) others += ", ";
+        others += rep.names[static_cast<std::size_t>(g.columns[b])];
+      }
+      note.text = note.name + " is confounded with " + others + " (variance proportions " + props +
+                  " on condition index " + fmt(g.condition_index, "%.3g") + ")";
+      note.hint = hint_for(note.name);
+      rep.notes.push_back(std::move(note));
+    }
+    rep.confounded.push_back(std::move(g));
+  }
+  return rep;
+}
+
+void print_collinearity_report(const CollinearityReport& rep, std::ostream& out) {
+  const RankReport& rk = rep.rank;
+  out << "design " << rk.rows << " x " << rk.cols << ", rank " << rk.rank << " (unit-norm columns, rcond "
+      << fmt(rk.rcond, "%.3g") << "), condition number " << fmt(rk.condition_number, "%.4g") << "\n";
+  VectorXd s = VectorXd::Zero(rk.cols);
+  s.head(rk.singular_values.size()) = rk.singular_values;
+  const ObservabilityIndices o = observability_indices(s, rk.rows);
+  out << "observability O1 " << fmt(o.o1) << ", O2 " << fmt(o.o2) << ", O3 " << fmt(o.o3) << ", O4 " << fmt(o.o4)
+      << ", O5 " << fmt(o.o5) << "\n";
+  out << "VIF:";
+  for (Index j = 0; j < rep.vif.size(); ++j) out << " " << rep.names[static_cast<std::size_t>(j)] << "=" << fmt(rep.vif(j));
+  out << "\n";
+  for (const NullCombination& c : rep.null_space) out << "null space: " << c.text << "\n";
+  for (const ParameterNote& n : rep.notes) {
+    out << n.text;
+    if (!n.hint.empty()) out << " — " << n.hint;
+    out << "\n";
+  }
+}
+
+}  // namespace kincal::identify
