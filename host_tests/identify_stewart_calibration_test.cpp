@@ -193,3 +193,35 @@ TEST(identifyStewartCalibration, ModelFileRoundTrip) {
     EXPECT_NE(std::string(e.what()).find("cut.json:1:"), std::string::npos) << e.what();
   }
 }
+
+TEST(identifyStewartCalibration, Table4AsMeasuredDataFlagsRowA2) {
+  // Issue #3: seed 001's Table 4 used as measured data — the tool reports
+  // which rows are inconsistent with the others and what the rest gives.
+  const Robot nominal = builtin_robot("stewart-seed001");
+  const PoseTable t4 = read_pose_table(kExamples + "/seed001/table4_paper.csv");
+  const StewartCalibration all = calibrate_stewart(nominal, t4);
+  ASSERT_FALSE(all.outliers.empty());
+  const StewartOutlierSearch search = stewart_outlier_search(nominal, t4);
+  ASSERT_FALSE(search.removed.empty());
+  EXPECT_EQ(search.removed.front().id, "A2");
+  EXPECT_LT(search.removed.front().p_value, 1e-12);
+  std::printf("set aside:");
+  for (const NodeTest& n : search.removed) std::printf(" %s (p = %.2g)", n.id.c_str(), n.p_value);
+  std::printf("; the rest fits to %.4f um RMS (all rows: %.3f um)\n", 1e3 * search.rest.history.back().rms_position_mm,
+              1e3 * all.history.back().rms_position_mm);
+  // Without the inconsistent rows the paper's data fit to its printed digits.
+  EXPECT_LT(search.rest.history.back().rms_position_mm, 1e-4);
+  EXPECT_GT(all.history.back().rms_position_mm, 1e-3);
+}
+
+TEST(identifyStewartCalibration, CleanDataFlagsNoOutlier) {
+  const Robot nominal = builtin_robot("stewart-seed001");
+  const Robot actual = apply_parameters(nominal, read_parameters(kExamples + "/seed001/errors.csv", nominal));
+  SimulateOptions noisy;
+  noisy.noise_mm = 0.001;
+  noisy.noise_rad = 5e-6;
+  noisy.seed = 21;
+  SimulateReport rep;
+  const PoseTable meas = simulate(nominal, actual, read_pose_table(kExamples + "/seed001/grid_poses.csv"), noisy, rep);
+  EXPECT_TRUE(calibrate_stewart(nominal, meas).outliers.empty());
+}

@@ -101,6 +101,7 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
 
 struct IdentifyArgs {
   std::string robot, data, out, estimator = "ols", effects, json;
+  bool exclude_outliers = false;
 };
 
 nlohmann::json stats_json(const ki::PoseErrorStats& s) {
@@ -135,7 +136,25 @@ int run_identify(const IdentifyArgs& a) {
                   h.step_norm);
     std::cout << line;
   }
-  const ki::CalibrationModel model = ki::stewart_model(robot, c, a.data);
+  ki::StewartOutlierSearch search;
+  if (c.outliers.empty()) {
+    std::cout << "  outliers: none (deleted-node F test, p < " << c.outlier_p_threshold << ")\n";
+  } else {
+    search = ki::stewart_outlier_search(robot, data);
+    std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n";
+    for (const ki::NodeTest& t : search.removed)
+      std::cout << "    " << a.data << ":" << t.line << ": node '" << t.id << "': F = " << t.f << ", p = " << t.p_value
+                << "\n";
+    std::cout << "  the other " << search.rest.nodes << " nodes alone fit to " << 1e3 * search.rest.history.back().rms_position_mm
+              << " um RMS (all nodes: " << 1e3 * c.history.back().rms_position_mm << " um); "
+              << (a.exclude_outliers ? "the model uses them only (--exclude-outliers)"
+                                     : "the model still uses every node (exclude with --exclude-outliers)")
+              << "\n";
+  }
+  std::vector<std::string> outlier_ids;
+  for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
+  const ki::StewartCalibration& used = a.exclude_outliers && !search.removed.empty() ? search.rest : c;
+  const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
   ki::write_model_file(model, a.out);
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
   const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
@@ -149,13 +168,19 @@ int run_identify(const IdentifyArgs& a) {
     j["robot"] = robot.name;
     j["data"] = a.data;
     j["estimator"] = "ols";
-    j["rank"] = c.rank;
+    j["rank"] = used.rank;
     j["parameters"] = 42;
     j["dropped"] = nlohmann::json::array();
-    j["condition_number"] = c.condition_number;
-    j["sigma_um"] = 1e3 * c.sigma_mm;
-    j["iterations"] = c.history.size();
-    j["outliers"] = nlohmann::json::array();
+    j["condition_number"] = used.condition_number;
+    j["sigma_um"] = 1e3 * used.sigma_mm;
+    j["iterations"] = used.history.size();
+    j["outliers"] = outlier_ids;
+    j["outliers_excluded"] = a.exclude_outliers && !outlier_ids.empty();
+    nlohmann::json tests = nlohmann::json::array();
+    for (const ki::NodeTest& t : c.node_tests)
+      tests.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
+    j["node_tests"] = tests;
+    j["outlier_p_threshold"] = c.outlier_p_threshold;
     nlohmann::json res_before, res_after;
     res_before["all"] = stats_json(before.all);
     res_after["all"] = stats_json(after.all);
@@ -269,6 +294,8 @@ int run(int argc, char** argv) {
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
   identify->add_option("--effects", ident.effects, "effects to include (issue #4)");
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
+  identify->add_flag("--exclude-outliers", ident.exclude_outliers,
+                     "fit without the nodes found inconsistent with the others (default: report them only)");
 
   std::string comp_robot, comp_model, comp_poses, comp_out;
   CLI::App* compensate = app.add_subcommand("compensate", "turn requested poses into compensated joint commands");

@@ -1,9 +1,10 @@
 #include "kincal/identify/stewart_calibration.hpp"
 
-#include <Eigen/QR>
-#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/parameters.hpp"
 
@@ -93,6 +94,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   out.theta = Eigen::VectorXd::Zero(m);
   Eigen::MatrixXd H(n, m);
   Eigen::VectorXd y(n);
+  LinearProblem last_problem;
   for (int it = 0;; ++it) {
     // Steps 3–4 / 7–8: poses of the machine as currently believed, and the
     // residual pose errors dQ = QM − QC.
@@ -117,39 +119,63 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     }
     rec.rms_position_mm = std::sqrt(sum_p2 / double(nodes.size()));
     if (it > 0) rec.step_norm = out.history.back().step_norm;
-    // Step 5: LS on column-scaled H (mm and dimensionless columns alike).
-    const Eigen::VectorXd scale = H.colwise().norm().transpose().cwiseMax(1e-300);
-    const Eigen::MatrixXd Hs = H * scale.cwiseInverse().asDiagonal();
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Hs);
-    qr.setThreshold(1e-10);
-    if (qr.rank() < m) {
+    // Step 5: LS (identify/estimators: SVD, rank judged on the column-scaled
+    // design; never normal equations).
+    LinearProblem problem;
+    problem.H = H;
+    problem.y = y;
+    problem.names = names;
+    problem.row_node.resize(std::size_t(n));
+    for (Eigen::Index r = 0; r < n; ++r) problem.row_node[std::size_t(r)] = r / 6;
+    const RankReport rank = rank_by_svd(H);
+    if (rank.rank < m) {
       std::string which;
-      for (Eigen::Index j = qr.rank(); j < m; ++j)
-        which += (which.empty() ? "" : ", ") + names[std::size_t(qr.colsPermutation().indices()(j))];
+      for (const Eigen::Index j : unidentifiable_columns(H))
+        which += (which.empty() ? "" : ", ") + names[std::size_t(j)];
       throw InputError(data.file, 0, 0,
-                       "the calibration poses do not determine all 42 parameters (rank " + std::to_string(qr.rank()) +
+                       "the calibration poses do not determine all 42 parameters (rank " + std::to_string(rank.rank) +
                            "); not identifiable: " + which +
                            ". Spread the poses over more positions and orientations of the workspace");
     }
-    const Eigen::VectorXd delta = scale.cwiseInverse().asDiagonal() * qr.solve(y);
-    const double rss = (y - H * delta).squaredNorm();
-    out.sigma_mm = std::sqrt(rss / double(std::max<Eigen::Index>(1, n - m)));
-    out.rank = int(qr.rank());
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Hs);
-    out.condition_number = svd.singularValues()(0) / svd.singularValues()(m - 1);
-    // Standard errors: σ²·(HsᵀHs)⁻¹ = σ²·P·R⁻¹R⁻ᵀ·Pᵀ, unscaled.
-    const Eigen::MatrixXd R = qr.matrixR().topLeftCorner(m, m).triangularView<Eigen::Upper>();
-    const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(m, m));
-    out.standard_error.resize(m);
-    for (int j = 0; j < m; ++j) {
-      const Eigen::Index col = qr.colsPermutation().indices()(j);
-      out.standard_error(col) = out.sigma_mm * Rinv.row(j).norm() / scale(col);
-    }
+    const Estimate estimate = ols(problem);
+    const Eigen::VectorXd& delta = estimate.x;
+    out.sigma_mm = std::sqrt(estimate.sigma2_unbiased);
+    out.rank = int(rank.rank);
+    out.condition_number = rank.condition_number;
+    out.standard_error = estimate.standard_error;
+    last_problem = std::move(problem);
     rec.step_norm = delta.norm();
     out.history.push_back(rec);
     // Step 6 / 10: correct and repeat until the correction is negligible.
     out.theta += delta;
     if (delta.norm() <= options.step_tolerance * (1 + out.theta.norm()) || it + 1 >= options.max_iterations) break;
+  }
+  // Nodes inconsistent with the others (a mis-seated reflector, a mistyped
+  // row): deleted-node F test at the solution, Bonferroni over the nodes.
+  // Reported, never silently excluded.
+  const OutlierReport outliers = detect_outliers(last_problem);
+  for (const NodeStatistic& st : outliers.nodes) {
+    const Node& node = nodes[std::size_t(st.node)];
+    out.node_tests.push_back({node.id, node.line, st.f, st.p_value, st.testable, st.outlying});
+    if (st.outlying) out.outliers.push_back(node.id);
+  }
+  out.outlier_p_threshold = outliers.p_threshold;
+  return out;
+}
+
+StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
+                                            const StewartCalibrationOptions& options) {
+  StewartOutlierSearch out;
+  PoseTable rest = data;
+  out.rest = calibrate_stewart(nominal, rest, options);
+  while (!out.rest.outliers.empty() && out.rest.nodes > 8) {
+    const NodeTest* worst = nullptr;
+    for (const NodeTest& t : out.rest.node_tests)
+      if (t.outlying && (worst == nullptr || t.p_value < worst->p_value)) worst = &t;
+    out.removed.push_back(*worst);
+    const std::string id = worst->id;
+    rest.rows.erase(std::find_if(rest.rows.begin(), rest.rows.end(), [&](const PoseRow& r) { return r.id == id; }));
+    out.rest = calibrate_stewart(nominal, rest, options);
   }
   return out;
 }

@@ -43,6 +43,13 @@ struct StewartCalibrationOptions {
   double step_tolerance = 1e-9;  // stop when |Δθ| ≤ step_tolerance · (1 + |θ|)
 };
 
+struct NodeTest {
+  std::string id;
+  std::size_t line = 0;
+  double f = 0, p_value = 1;  // deleted-node F statistic and its p-value
+  bool testable = true, outlying = false;
+};
+
 struct StewartCalibration {
   Eigen::VectorXd theta;            // identified errors (42)
   Eigen::VectorXd standard_error;   // OLS standard errors at the solution
@@ -51,6 +58,9 @@ struct StewartCalibration {
   double condition_number = 0;      // of the column-scaled design
   std::size_t nodes = 0;            // cal nodes used
   double sigma_mm = 0;              // residual σ (RSS / (n − m))^½ of the last fit
+  std::vector<NodeTest> node_tests;   // per cal node, at the solution
+  std::vector<std::string> outliers;  // ids of nodes inconsistent with the others (reported only)
+  double outlier_p_threshold = 0;     // Bonferroni: α / testable nodes
 };
 
 // Identifies θ from the table's `cal` rows (test rows are never used). Each row
@@ -60,6 +70,20 @@ struct StewartCalibration {
 // design (naming the parameters), or FK failures of the corrected machine.
 StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data,
                                      const StewartCalibrationOptions& options = {});
+
+// Which nodes are inconsistent with the others: the most significant outlier
+// of calibrate_stewart is set aside, the rest refitted and tested again, until
+// no node is flagged (a sequential search: one gross error makes its
+// neighbours look suspicious too, so they are not all flagged at once).
+// `removed` in the order found (each with its test statistic at that step);
+// `rest` is the calibration of the remaining cal nodes. Stops when fewer than
+// 8 nodes would remain.
+struct StewartOutlierSearch {
+  std::vector<NodeTest> removed;
+  StewartCalibration rest;
+};
+StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
+                                            const StewartCalibrationOptions& options = {});
 
 // Residuals of a (calibrated) 6-UPS against measured data, all rows: the
 // measured pose minus the FK of `robot` for the row's joint commands (q1..q6,
