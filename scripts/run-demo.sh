@@ -48,15 +48,29 @@ $kincal simulate --robot stewart-seed001 --poses out/seed001_test_joints.csv \
 $kincal errors --data out/seed001_test_compensated.csv | tail -n +2
 
 echo
-echo "== 3. hybrid-seed000: laser-tracker data of the polishing robot with hidden source errors"
-echo "   (3 layers x 7 x 7 nodes, pure translation, gauge targets, 5 um tracker noise)"
+echo "== 3. hybrid-seed000: seed 000's coarse + fine calibration of the polishing robot"
+echo "   hidden source errors (encoder offsets + structural); gauge with 5 um tracker noise;"
+echo "   3 layers x 7 x 7 nodes, pure translation; layers 1 and 3 calibrate, layer 2 tests"
 $kincal simulate --robot hybrid-seed000 --poses examples/hybrid-seed000/poses.csv \
   --errors examples/hybrid-seed000/errors.csv --noise-mm 0.005 --noise-rad 0.000005 --seed 2026 \
   --out out/hybrid_measured.csv
-$kincal errors --data out/hybrid_measured.csv
+$kincal identify --robot hybrid-seed000 --data out/hybrid_measured.csv \
+  --out out/hybrid_model.json --json out/hybrid_summary.json
+grep -E '^(id|L2)' examples/hybrid-seed000/poses.csv > out/hybrid_test_poses.csv
+$kincal compensate --robot hybrid-seed000 --model out/hybrid_model.json \
+  --poses out/hybrid_test_poses.csv --out out/hybrid_test_joints.csv
 echo
-echo "   This is the uncalibrated hybrid as a laser tracker sees it. Its identification"
-echo "   (seed 000's coarse + fine calibration), the diagnosis of unmodelled effects and"
-echo "   the firmware tables are the next stages of this job (issues #3-#5)."
+echo "   test layer on the erroneous machine, uncompensated (nominal IK):"
+$kincal simulate --robot hybrid-seed000 --poses out/hybrid_test_poses.csv \
+  --errors examples/hybrid-seed000/errors.csv --out out/hybrid_test_uncompensated.csv
+$kincal errors --data out/hybrid_test_uncompensated.csv | tail -n +2
 echo
-echo "== outputs in out/: measurements, seed001_model.json, seed001_summary.json, compensated joints"
+echo "   the same nodes with the compensated joint commands (seed 000 Eq. (16)):"
+$kincal simulate --robot hybrid-seed000 --poses out/hybrid_test_joints.csv \
+  --errors examples/hybrid-seed000/errors.csv --out out/hybrid_test_compensated.csv
+$kincal errors --data out/hybrid_test_compensated.csv | tail -n +2
+echo
+echo "   Next stages of this job: diagnosing an effect the model lacks (issue #4) and"
+echo "   deploying the model into firmware tables (issue #5)."
+echo
+echo "== outputs in out/: measurements, models (MODEL.json), summaries (SUMMARY.json), compensated joints"

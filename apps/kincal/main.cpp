@@ -7,14 +7,17 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -100,7 +103,7 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
 }
 
 struct IdentifyArgs {
-  std::string robot, data, out, estimator = "ols", effects, json;
+  std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / liu (hybrid)
   bool exclude_outliers = false;
 };
 
@@ -113,14 +116,61 @@ nlohmann::json stats_json(const ki::PoseErrorStats& s) {
           {"mean_orientation_urad", 1e6 * s.mean_orientation_rad}};
 }
 
+// seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
+// the identifiable source errors by Liu (Eq. (11), d of Eq. (14)) or OLS.
+int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
+  const std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
+  if (estimator != "liu" && estimator != "ols")
+    throw ki::InputError("--estimator " + estimator + ": the hybrid's fine calibration offers liu (default) and ols");
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (seed 000: coarse encoder offsets, then fine "
+            << estimator << " on the identifiable source errors)\n";
+  const ki::HybridCalibration c = ki::calibrate_hybrid(robot, data);
+  std::cout << "  cal nodes " << c.cal_nodes << "\n  coarse (Eq. (15)): " << c.coarse_history.size()
+            << " rounds, converged: " << (c.coarse_converged ? "yes" : "no") << "\n";
+  for (std::size_t k = 0; k < c.coarse_history.size(); ++k)
+    std::cout << "    round " << k + 1 << ": gauge residual rms " << 1e3 * c.coarse_history[k].rms_residual
+              << " um, relative change " << c.coarse_history[k].relative_change << "\n";
+  const ki::Estimate& est = estimator == "liu" ? c.liu : c.ols;
+  std::cout << "  fine: " << c.kept.size() << " of 150 source errors identifiable (Sec. 4.1 reconstruction), rank "
+            << c.rank << ", condition number " << c.condition_number;
+  if (estimator == "liu") std::cout << ", Liu d = " << c.liu.liu_d;
+  std::cout << "\n  fit residual rms " << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows)))
+            << " um per gauge coordinate\n";
+  const ki::CalibrationModel model =
+      ki::hybrid_model(robot, c, estimator == "liu" ? ki::HybridFineEstimator::Liu : ki::HybridFineEstimator::Ols, a.data);
+  ki::write_model_file(model, a.out);
+  std::cout << "model written to " << a.out << "\n";
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["robot"] = robot.name;
+    j["data"] = a.data;
+    j["estimator"] = estimator;
+    j["rank"] = c.rank;
+    j["parameters"] = 150;
+    j["identifiable"] = c.kept_names;
+    j["dropped"] = c.dropped_names;
+    j["condition_number"] = c.condition_number;
+    j["liu_d"] = c.liu.liu_d;
+    j["coarse_iterations"] = c.coarse_history.size();
+    j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
+    j["outliers"] = nlohmann::json::array();  // node screening of the hybrid: not yet (issue #3)
+    std::ofstream f(a.json);
+    if (!f) throw ki::InputError(a.json, 0, 0, "cannot open for writing");
+    f << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
 int run_identify(const IdentifyArgs& a) {
   const ki::Robot robot = ki::load_robot(a.robot);
   if (!a.effects.empty())
     throw ki::InputError("--effects: the effects library is not available yet (issue #4)");
-  if (!robot.is_stewart())
-    throw ki::InputError(a.robot + ": identification of the hybrid robot is not implemented yet (issue #3: the "
-                                   "seed 000 source-error model and the coarse + fine pipeline are in progress)");
-  if (a.estimator != "ols")
+  if (robot.is_hybrid()) {
+    ki::PoseTableOptions options;
+    options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+    return run_identify_hybrid(a, robot, ki::read_pose_table(a.data, options));
+  }
+  if (!a.estimator.empty() && a.estimator != "ols")
     throw ki::InputError("--estimator " + a.estimator +
                          ": the 6-UPS (seed 001) calibration uses ols; ridge, liu and pcr come with issue #3");
   ki::PoseTableOptions options;
@@ -202,10 +252,12 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot))
     throw ki::InputError(model_path, 0, 0,
                          "was identified on robot '" + model.nominal.name + "', not on " + robot_name);
-  if (!robot.is_stewart())
-    throw ki::InputError(robot_name + ": compensation of the hybrid robot (seed 000 Eq. (16)) is not implemented yet "
-                                      "(issue #3)");
-  const ki::Robot calibrated = ki::calibrated_robot(model);
+  // 6-UPS: IK of the corrected geometry (seed 001); hybrid: correct the pose
+  // by the predicted error twist, then the ideal IK with the identified
+  // encoder offsets (seed 000 Eq. (16)).
+  const ki::Robot calibrated = robot.is_stewart() ? ki::calibrated_robot(model) : robot;
+  std::optional<ki::HybridCompensation> hybrid;
+  if (robot.is_hybrid()) hybrid = ki::hybrid_compensation_from_model(model);
   ki::PoseTableOptions options;
   options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
   const ki::PoseTable poses = ki::read_pose_table(poses_path, options);
@@ -223,7 +275,8 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
     o.commanded = r.commanded;
     kincal::Vec6<double> q;
     // seed 001's compensation: the IK of the corrected geometry.
-    const kincal::Status s = calibrated.inverse(kincal::Pose<double>::from_xyz_rpy(r.commanded), q);
+    const kincal::Pose<double> want = kincal::Pose<double>::from_xyz_rpy(r.commanded);
+    const kincal::Status s = hybrid ? ki::compensate_hybrid(*hybrid, want, q) : calibrated.inverse(want, q);
     o.status = kincal::to_string(s);
     if (s == kincal::Status::Ok) {
       o.q = Eigen::VectorXd(q);
@@ -290,7 +343,7 @@ int run(int argc, char** argv) {
   identify->add_option("--robot", ident.robot, "built-in robot name or robot description file")->required();
   identify->add_option("--data", ident.data, "measurement CSV")->required();
   identify->add_option("--out", ident.out, "MODEL.json to write")->required();
-  identify->add_option("--estimator", ident.estimator, "ols (default), ridge, liu, pcr")
+  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr")
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
   identify->add_option("--effects", ident.effects, "effects to include (issue #4)");
   identify->add_option("--json", ident.json, "SUMMARY.json to write");

@@ -1,0 +1,155 @@
+// Seed 000's calibration pipeline for the hybrid robot (Section 4.3): coarse
+// calibration of the six encoder offsets by iterated OLS (Eq. (15)), fine
+// calibration of the identifiable source errors by the Liu estimator on the
+// reconstructed identification Jacobian (Sections 4.1–4.2), pose error
+// compensation by correcting the requested pose and running the ideal IK
+// (Eq. (16)), the Monte Carlo robustness index η (Eqs. (17)–(18)), and the
+// round trip through MODEL.json. docs/hybrid-calibration.md has the details
+// and the measured numbers.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/pose.hpp"
+#include "kincal/core/status.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+struct HybridCalibrationOptions {
+  // Eq. (15) stop rule, read as "relative change between two successive
+  // estimates": ‖ξ̂^{k+1} − ξ̂^k‖ / ‖ξ̂^{k+1}‖ ≤ eps_xi (5 % as the paper).
+  double eps_xi = 0.05;
+  int max_coarse_iterations = 20;
+  bool fine = true;  // false: coarse only
+  LiuOptions liu;    // Eq. (14) d by default
+  // Fit on the column-scaled design H·D⁻¹ (unit column norms) rather than on H
+  // in mm and rad. Liu's filter (λ+d)/(λ+1) depends on the scaling.
+  bool scale_columns = false;
+  // reconstruct_by_column_selection's tolerance: a unit column counts as new
+  // when its distance from the span so far exceeds it (<0: its ε-level
+  // default). 1e-4 rather than a rounding-level value: columns that are new
+  // only at 1e-6..1e-8 are identifiable in exact arithmetic but turn 5 µm of
+  // gauge noise into millimetre-sized estimates (docs/hybrid-calibration.md).
+  double selection_tolerance = 1e-4;
+};
+
+struct HybridCoarseIteration {
+  Vec6<double> delta_xi = Vec6<double>::Zero();  // Δξ̂^k of this round
+  Vec6<double> xi = Vec6<double>::Zero();        // ξ̂^{k+1} after it
+  double relative_change = 0;                    // ‖Δξ̂^k‖ / ‖ξ̂^{k+1}‖
+  double rms_residual = 0;                       // RMS of the gauge residual before the round, mm
+};
+
+// What the controller needs to compensate (seed 000 Eq. (16) and Fig. 4):
+// the ideal IK with the encoder offsets in the geometry, and the predicted
+// pose error twist $_t = B·Δη̂ of the structural errors.
+struct HybridCompensation {
+  HybridGeometry<double> nominal;                       // the nominal machine (its own joint_offset included)
+  Vec6<double> encoder_offsets = Vec6<double>::Zero();  // ξ̂: added to nominal.joint_offset in the IK
+  Eigen::VectorXd structural;                           // Δχ̂ (150; encoder entries 0) or empty: none
+  std::shared_ptr<const HybridErrorModel> model;        // B of the nominal machine
+  // The controller's geometry: nominal with joint_offset += encoder_offsets.
+  HybridGeometry<double> controller_geometry() const;
+};
+
+enum class HybridFineEstimator { None, Ols, Liu };
+
+struct HybridCalibration {
+  HybridGeometry<double> nominal;
+  double gauge_radius = 0;
+  std::size_t cal_nodes = 0;
+
+  // coarse (Eq. (15))
+  Vec6<double> coarse_xi = Vec6<double>::Zero();
+  std::vector<HybridCoarseIteration> coarse_history;
+  bool coarse_converged = false;
+
+  // fine: Δχ increments relative to the coarse machine, over the kept columns
+  bool fine_done = false;
+  std::vector<Eigen::Index> kept, dropped;  // Δχ indices (encoders first)
+  std::vector<std::string> kept_names, dropped_names;
+  Eigen::Index rank = 0;
+  double condition_number = 0;   // column-scaled reconstructed H
+  LinearProblem fine_problem;    // H (kept columns, divided by column_scale) and y (gauge residuals)
+  Eigen::VectorXd column_scale;  // D (ones unless scale_columns)
+  Estimate liu, ols;
+  Eigen::VectorXd chi_liu, chi_ols;  // 150 each, zeros where dropped
+
+  // Total encoder offsets ξ̂ + Δξ̂ (fine) and the structural part, for an estimator.
+  HybridCompensation compensation(HybridFineEstimator estimator = HybridFineEstimator::Liu) const;
+};
+
+// Coarse + fine calibration on the `cal` rows of `data` that carry gauge
+// targets (t1..t3) and no failure status; commands are the row's q1..q6 or the
+// nominal IK of the commanded pose. Throws InputError (non-hybrid robot, too
+// few usable rows, IK/FK failure at a node, rank-deficient H_ξ).
+HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
+                                   const HybridCalibrationOptions& options = {});
+
+// Eq. (16): $_t = B(requested)·Δχ̂, corrected = apply_twist(requested, −$_t),
+// q = ideal IK of the corrected pose on controller_geometry(). Returns the IK
+// (or B) status; q is written only on Ok.
+Status compensate_hybrid(const HybridCompensation& compensation, const Pose<double>& requested, Vec6<double>& q);
+Status compensate_hybrid(const HybridCalibration& calibration, const Pose<double>& requested, Vec6<double>& q);
+
+// ---- evaluation (seed 000 Table 5) ------------------------------------------
+
+struct HybridLayerError {
+  long long layer = 0;  // row's layer (0 when absent)
+  std::size_t nodes = 0;
+  std::size_t failed = 0;                            // IK / FK failures (not in the statistics)
+  double max_position = 0, mean_position = 0;        // |Δp| of P, mm
+  double max_orientation = 0, mean_orientation = 0;  // |Δθ|, deg
+};
+
+// Commands every row's pose (compensated when `compensation` is given, else
+// the nominal IK of `nominal`), drives the erroneous `machine` (hybrid Robot
+// with source_errors, or its ideal geometry if none) and compares the reached
+// pose with the requested one. One entry per layer, ascending.
+std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const HybridGeometry<double>& nominal,
+                                              const PoseTable& poses, const HybridCompensation* compensation);
+
+// ---- Monte Carlo robustness index (Eqs. (17)–(18)) ----------------------------
+
+struct HybridMonteCarlo {
+  int runs = 0;
+  double sigma_mm = 0;
+  Eigen::VectorXd sd_ols, sd_liu;       // per kept parameter, standard deviation over the runs
+  double sigma_ols = 0, sigma_liu = 0;  // √Σ variance (Eq. (18), D = variance)
+  double eta = 0;                       // 1 − σ_L/σ_OLS, in percent
+  double seconds = 0;                   // wall time of the runs (SVD excluded)
+  double mean_d = 0;                    // mean Liu d over the runs
+};
+
+// Fresh Gaussian noise (σ on every gauge coordinate) added to y0 = H·Δχ̂_L on
+// the calibration's fixed design, N OLS and Liu fits through one
+// PreparedDesign (one SVD).
+HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int runs, double sigma_mm,
+                                    std::uint64_t seed = 1);
+
+// ---- MODEL.json -------------------------------------------------------------
+
+// Parameters by HybridErrorModel names: dxi_* = total encoder offsets
+// (coarse + fine), then the kept structural errors (fine), then the dropped
+// ones (identifiable = false, value 0). estimator "liu" (or "ols"); settings
+// liu_d, eps_xi, coarse_iterations, rank, condition_number.
+CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& calibration,
+                              HybridFineEstimator estimator = HybridFineEstimator::Liu,
+                              const std::string& data_file = {});
+// Rebuilds the compensation from a model: dxi_* (and the older joint-offset
+// names dq1..dq3, dtheta4..dtheta6) → encoder offsets, any other
+// HybridErrorModel name → structural. Throws InputError on a non-hybrid robot
+// or an unknown name.
+HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model);
+
+}  // namespace kincal::identify

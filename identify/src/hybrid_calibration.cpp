@@ -1,0 +1,418 @@
+// Seed 000 Section 4.3: coarse (Eq. (15)) + fine (Liu) calibration of the
+// hybrid robot, compensation (Eq. (16)), Monte Carlo η (Eqs. (17)–(18)).
+#include "kincal/identify/hybrid_calibration.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+#include <string>
+
+#include "kincal/identify/gauge.hpp"
+#include "kincal/identify/identifiability.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/simulate.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+struct Node {
+  std::string id;
+  Vec6<double> q = Vec6<double>::Zero();
+  Pose<double> commanded;
+  HybridPassive<double> guess;
+  Eigen::Matrix<double, 9, 1> measured = Eigen::Matrix<double, 9, 1>::Zero();
+};
+
+bool usable_status(const std::string& s) { return s.empty() || s == "ok"; }
+
+std::vector<Node> cal_nodes(const HybridGeometry<double>& g, const PoseTable& data) {
+  std::vector<Node> nodes;
+  for (const PoseRow& row : data.rows) {
+    if (row.role != Role::Cal || !row.targets || !usable_status(row.status)) continue;
+    Node n;
+    n.id = row.id;
+    n.commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    n.guess = g.home;
+    Vec6<double> q_ik;
+    const Status ik = hybrid_ik(g, n.commanded, q_ik, nullptr, &n.guess);
+    if (row.q && row.q->size() == 6) {
+      n.q = *row.q;
+      if (ik != Status::Ok) n.guess = g.home;
+    } else {
+      if (ik != Status::Ok)
+        throw InputError(
+            data.file, row.line, 0,
+            "row '" + row.id + "': inverse kinematics of the commanded pose failed (" + to_string(ik) + ")");
+      n.q = q_ik;
+    }
+    for (int k = 0; k < 9; ++k) n.measured(k) = row.targets->data()[k];
+    nodes.push_back(n);
+  }
+  return nodes;
+}
+
+// Predicted tool pose and gauge targets of the machine `g` (its joint_offset
+// holding the current encoder estimate) for a node's commands.
+Pose<double> predict(const HybridGeometry<double>& g, const Node& n, const std::string& file) {
+  Pose<double> tool;
+  const auto rep = hybrid_fk(g, n.q, n.guess, tool);
+  if (rep.status != Status::Ok)
+    throw InputError(file, 0, 0,
+                     "hybrid calibration: FK of node '" + n.id + "' failed (" + to_string(rep.status) + ")");
+  return tool;
+}
+
+Eigen::Matrix<double, 9, 1> targets9(const HybridGeometry<double>& g, double radius, const Pose<double>& tool) {
+  const Eigen::Matrix<double, 3, 3> t = gauge_targets(g, radius, tool);
+  Eigen::Matrix<double, 9, 1> out;
+  for (int k = 0; k < 9; ++k) out(k) = t.data()[k];
+  return out;
+}
+
+}  // namespace
+
+HybridGeometry<double> HybridCompensation::controller_geometry() const {
+  HybridGeometry<double> g = nominal;
+  g.joint_offset += encoder_offsets;
+  return g;
+}
+
+HybridCompensation HybridCalibration::compensation(HybridFineEstimator estimator) const {
+  HybridCompensation c;
+  c.nominal = nominal;
+  c.model = std::make_shared<const HybridErrorModel>(nominal);
+  c.encoder_offsets = coarse_xi;
+  if (estimator != HybridFineEstimator::None && fine_done) {
+    const VectorXd& chi = estimator == HybridFineEstimator::Liu ? chi_liu : chi_ols;
+    c.encoder_offsets += chi.head<6>();
+    c.structural = chi;
+    c.structural.head<6>().setZero();
+  }
+  return c;
+}
+
+HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
+                                   const HybridCalibrationOptions& options) {
+  if (!nominal.is_hybrid())
+    throw InputError("hybrid calibration needs a hybrid robot (" + std::string(kHybridFamily) + ")");
+  if (!(nominal.gauge_radius > 0)) throw InputError("hybrid calibration: the robot has no gauge radius");
+  if (!(options.eps_xi > 0) || options.max_coarse_iterations < 1)
+    throw InputError("hybrid calibration: eps_xi must be > 0 and max_coarse_iterations >= 1");
+  const HybridGeometry<double>& g0 = nominal.hybrid();
+  const double radius = nominal.gauge_radius;
+  const std::vector<Node> nodes = cal_nodes(g0, data);
+  const Index N = static_cast<Index>(nodes.size());
+  if (N < 2) throw InputError(data.file, 0, 0, "hybrid calibration: fewer than 2 usable cal rows with gauge targets");
+
+  HybridCalibration out;
+  out.nominal = g0;
+  out.gauge_radius = radius;
+  out.cal_nodes = nodes.size();
+  const HybridErrorModel model(g0);
+  const auto& params = model.parameters();
+  MatrixXd B(6, HybridErrorModel::kParameterCount);
+
+  // ---- coarse (Eq. (15)): H_ξ at the nominal configuration of each node ----
+  MatrixXd Hxi(9 * N, 6);
+  for (Index k = 0; k < N; ++k) {
+    const Node& n = nodes[static_cast<std::size_t>(k)];
+    const Status st = model.error_jacobian(n.commanded, B);
+    if (st != Status::Ok)
+      throw InputError(data.file, 0, 0,
+                       "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
+    Hxi.middleRows(9 * k, 9) = gauge_map(g0, radius, n.commanded) * B.leftCols(6);
+  }
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(Hxi);
+  if (qr.rank() < 6)
+    throw InputError(data.file, 0, 0,
+                     "hybrid calibration: H_xi is rank-deficient (rank " + std::to_string(qr.rank()) + " < 6)");
+
+  HybridGeometry<double> gc = g0;
+  VectorXd r(9 * N);
+  auto residual = [&]() {
+    gc.joint_offset = g0.joint_offset + out.coarse_xi;
+    for (Index k = 0; k < N; ++k) {
+      const Node& n = nodes[static_cast<std::size_t>(k)];
+      r.segment<9>(9 * k) = n.measured - targets9(g0, radius, predict(gc, n, data.file));
+    }
+  };
+  for (int it = 0; it < options.max_coarse_iterations; ++it) {
+    residual();
+    HybridCoarseIteration h;
+    h.rms_residual = std::sqrt(r.squaredNorm() / static_cast<double>(r.size()));
+    h.delta_xi = qr.solve(r);
+    out.coarse_xi += h.delta_xi;
+    h.xi = out.coarse_xi;
+    const double xn = out.coarse_xi.norm();
+    h.relative_change = xn > 0 ? h.delta_xi.norm() / xn : 0.0;
+    out.coarse_history.push_back(h);
+    if (!std::isfinite(h.relative_change))
+      throw InputError(data.file, 0, 0, "hybrid calibration: coarse stage diverged");
+    if (h.relative_change <= options.eps_xi) {
+      out.coarse_converged = true;
+      break;
+    }
+  }
+  if (!options.fine) return out;
+
+  // ---- fine: linearise at the coarse machine's configuration of each node ----
+  residual();
+  MatrixXd H(9 * N, HybridErrorModel::kParameterCount);
+  for (Index k = 0; k < N; ++k) {
+    const Node& n = nodes[static_cast<std::size_t>(k)];
+    const Pose<double> tool = predict(gc, n, data.file);
+    const Status st = model.error_jacobian(tool, B);
+    if (st != Status::Ok)
+      throw InputError(data.file, 0, 0,
+                       "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
+    H.middleRows(9 * k, 9).noalias() = gauge_map(g0, radius, tool) * B;
+  }
+  std::vector<std::string> names;
+  names.reserve(params.size());
+  for (const auto& p : params) names.push_back(p.name);
+  std::vector<Index> xi_cols, eta_cols;
+  // Columns that are zero for this design (the error moves nothing measured)
+  // are dropped up front: the reconstruction works on unit-norm columns.
+  const double max_norm = H.colwise().norm().maxCoeff();
+  std::vector<Index> zero_cols;
+  for (Index j = 0; j < HybridErrorModel::kParameterCount; ++j) {
+    if (j < 6)
+      xi_cols.push_back(j);
+    else if (H.col(j).norm() > 1e-12 * max_norm)
+      eta_cols.push_back(j);
+    else
+      zero_cols.push_back(j);
+  }
+  MatrixXd Hsel(H.rows(), static_cast<Index>(xi_cols.size() + eta_cols.size()));
+  std::vector<std::string> sel_names;
+  std::vector<Index> sel_map, sel_xi, sel_eta;
+  for (const auto* set : {&xi_cols, &eta_cols})
+    for (Index j : *set) {
+      const Index c = static_cast<Index>(sel_map.size());
+      Hsel.col(c) = H.col(j);
+      sel_names.push_back(names[static_cast<std::size_t>(j)]);
+      sel_map.push_back(j);
+      (j < 6 ? sel_xi : sel_eta).push_back(c);
+    }
+  const ColumnSelection sel =
+      reconstruct_by_column_selection(Hsel, sel_xi, sel_eta, sel_names, options.selection_tolerance);
+  for (Index c : sel.kept) out.kept.push_back(sel_map[static_cast<std::size_t>(c)]);
+  for (Index c : sel.dropped) out.dropped.push_back(sel_map[static_cast<std::size_t>(c)]);
+  out.dropped.insert(out.dropped.end(), zero_cols.begin(), zero_cols.end());
+  std::sort(out.dropped.begin(), out.dropped.end());
+  for (Index j : out.kept) out.kept_names.push_back(names[static_cast<std::size_t>(j)]);
+  for (Index j : out.dropped) out.dropped_names.push_back(names[static_cast<std::size_t>(j)]);
+  out.rank = sel.rank;
+
+  LinearProblem& fp = out.fine_problem;
+  fp.H.resize(9 * N, static_cast<Index>(out.kept.size()));
+  for (std::size_t c = 0; c < out.kept.size(); ++c) fp.H.col(static_cast<Index>(c)) = H.col(out.kept[c]);
+  fp.y = r;
+  fp.names = out.kept_names;
+  fp.row_node.resize(static_cast<std::size_t>(9 * N));
+  for (Index i = 0; i < 9 * N; ++i) fp.row_node[static_cast<std::size_t>(i)] = i / 9;
+  out.condition_number = rank_by_svd(fp.H).condition_number;
+  // Estimation on H·D⁻¹ (unit column norms) when asked: the estimates are
+  // then of D·Δχ and are scaled back (Liu's shrinkage depends on the scaling).
+  out.column_scale = options.scale_columns ? column_scales(fp.H) : VectorXd::Ones(fp.H.cols());
+  for (Index c = 0; c < fp.H.cols(); ++c) fp.H.col(c) /= out.column_scale(c);
+  out.ols = ols(fp);
+  out.liu = liu(fp, options.liu);
+  for (Estimate* e : {&out.ols, &out.liu}) {
+    e->x = e->x.cwiseQuotient(out.column_scale);
+    e->standard_error = e->standard_error.cwiseQuotient(out.column_scale);
+  }
+  out.chi_ols = VectorXd::Zero(HybridErrorModel::kParameterCount);
+  out.chi_liu = VectorXd::Zero(HybridErrorModel::kParameterCount);
+  for (std::size_t c = 0; c < out.kept.size(); ++c) {
+    out.chi_ols(out.kept[c]) = out.ols.x(static_cast<Index>(c));
+    out.chi_liu(out.kept[c]) = out.liu.x(static_cast<Index>(c));
+  }
+  out.fine_done = true;
+  return out;
+}
+
+Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& requested, Vec6<double>& q) {
+  if (!requested.finite()) return Status::InvalidInput;
+  Pose<double> corrected = requested;
+  if (c.structural.size() > 0 && c.structural.lpNorm<Eigen::Infinity>() > 0) {
+    if (!c.model || c.structural.size() != c.model->size()) return Status::InvalidInput;
+    Eigen::MatrixXd B;
+    const Status st = c.model->error_jacobian(requested, B);
+    if (st != Status::Ok) return st;
+    const Twist<double> t = B * c.structural;  // Eq. (16): $_t = B·Δχ̂
+    corrected = apply_twist(requested, Twist<double>(-t));
+  }
+  Vec6<double> out;
+  const Status st = hybrid_ik(c.controller_geometry(), corrected, out);
+  if (st == Status::Ok) q = out;
+  return st;
+}
+
+Status compensate_hybrid(const HybridCalibration& calibration, const Pose<double>& requested, Vec6<double>& q) {
+  return compensate_hybrid(calibration.compensation(HybridFineEstimator::Liu), requested, q);
+}
+
+std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const HybridGeometry<double>& nominal,
+                                              const PoseTable& poses, const HybridCompensation* compensation) {
+  if (!machine.is_hybrid()) throw InputError("evaluate_hybrid needs a hybrid machine");
+  const HybridErrorModel em(machine.hybrid());
+  const bool sources = machine.source_errors.size() > 0;
+  std::map<long long, HybridLayerError> layers;
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  for (const PoseRow& row : poses.rows) {
+    const long long layer = row.layer.value_or(0);
+    HybridLayerError& e = layers[layer];
+    e.layer = layer;
+    const Pose<double> requested = Pose<double>::from_xyz_rpy(row.commanded);
+    Vec6<double> q_nom;
+    HybridPassive<double> passive = nominal.home;
+    Status st = hybrid_ik(nominal, requested, q_nom, nullptr, &passive);
+    Vec6<double> q = q_nom;
+    if (st == Status::Ok && compensation != nullptr) st = compensate_hybrid(*compensation, requested, q);
+    Pose<double> reached;
+    if (st == Status::Ok)
+      st = sources ? em.actual_fk(machine.source_errors, q, passive, reached).status
+                   : hybrid_fk(machine.hybrid(), q, passive, reached).status;
+    if (st != Status::Ok) {
+      ++e.failed;
+      continue;
+    }
+    const Twist<double> t = pose_error(reached, requested);
+    const double dp = t.head<3>().norm(), dr = t.tail<3>().norm() * kDeg;
+    ++e.nodes;
+    e.max_position = std::max(e.max_position, dp);
+    e.max_orientation = std::max(e.max_orientation, dr);
+    e.mean_position += dp;
+    e.mean_orientation += dr;
+  }
+  std::vector<HybridLayerError> out;
+  for (auto& [layer, e] : layers) {
+    if (e.nodes > 0) {
+      e.mean_position /= static_cast<double>(e.nodes);
+      e.mean_orientation /= static_cast<double>(e.nodes);
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int runs, double sigma_mm,
+                                    std::uint64_t seed) {
+  if (!calibration.fine_done) throw InputError("hybrid Monte Carlo: the calibration has no fine stage");
+  if (runs < 2 || !(sigma_mm > 0)) throw InputError("hybrid Monte Carlo: needs runs >= 2 and sigma > 0");
+  const LinearProblem& fp = calibration.fine_problem;
+  const PreparedDesign design(fp);
+  const Index n = fp.H.rows(), m = fp.H.cols();
+  const VectorXd& D = calibration.column_scale;
+  const VectorXd x_ref = calibration.ols.x.cwiseProduct(D);  // in fp's (possibly scaled) units
+  const VectorXd y0 = fp.H * calibration.liu.x.cwiseProduct(D);
+  HybridMonteCarlo out;
+  out.runs = runs;
+  out.sigma_mm = sigma_mm;
+  VectorXd sum_o = VectorXd::Zero(m), sq_o = VectorXd::Zero(m), sum_l = VectorXd::Zero(m), sq_l = VectorXd::Zero(m);
+  VectorXd y(n), xo(m), xl(m);
+  FitWorkspace ws;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  double sum_d = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int run = 0; run < runs; ++run) {
+    for (Index i = 0; i < n; ++i) y(i) = y0(i) + sigma_mm * unit(rng);
+    design.ols(y, xo, ws);
+    const FitInfo info = design.liu(y, xl, ws);
+    sum_d += info.d;
+    // deviations from the noise-free values keep the sums well conditioned
+    xo = (xo - x_ref).cwiseQuotient(D);  // back to mm / rad
+    xl = (xl - x_ref).cwiseQuotient(D);
+    sum_o += xo;
+    sq_o += xo.cwiseAbs2();
+    sum_l += xl;
+    sq_l += xl.cwiseAbs2();
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double R = static_cast<double>(runs);
+  const VectorXd var_o = ((sq_o - sum_o.cwiseAbs2() / R) / (R - 1)).cwiseMax(0.0);
+  const VectorXd var_l = ((sq_l - sum_l.cwiseAbs2() / R) / (R - 1)).cwiseMax(0.0);
+  out.sd_ols = var_o.cwiseSqrt();
+  out.sd_liu = var_l.cwiseSqrt();
+  out.sigma_ols = std::sqrt(var_o.sum());
+  out.sigma_liu = std::sqrt(var_l.sum());
+  out.eta = out.sigma_ols > 0 ? (1.0 - out.sigma_liu / out.sigma_ols) * 100.0 : 0.0;
+  out.mean_d = sum_d / R;
+  return out;
+}
+
+CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal, HybridFineEstimator estimator,
+                              const std::string& data_file) {
+  if (!nominal.is_hybrid()) throw InputError("hybrid_model needs a hybrid robot");
+  CalibrationModel m;
+  m.nominal = nominal;
+  m.nominal.source_errors.resize(0);
+  m.data_file = data_file;
+  const HybridCompensation c = cal.compensation(estimator);
+  const HybridErrorModel& em = *c.model;
+  const Estimate* est = nullptr;
+  if (cal.fine_done && estimator != HybridFineEstimator::None)
+    est = estimator == HybridFineEstimator::Liu ? &cal.liu : &cal.ols;
+  m.estimator =
+      estimator == HybridFineEstimator::Ols ? "ols" : (estimator == HybridFineEstimator::Liu ? "liu" : "coarse-ols");
+  auto se = [&](std::size_t column) {
+    return est != nullptr && est->standard_error.size() > static_cast<Index>(column)
+               ? est->standard_error(static_cast<Index>(column))
+               : 0.0;
+  };
+  for (int k = 0; k < 6; ++k)
+    m.parameters.push_back({em.parameters()[static_cast<std::size_t>(k)].name, c.encoder_offsets(k),
+                            se(static_cast<std::size_t>(k)), true});
+  if (cal.fine_done) {
+    for (std::size_t col = 0; col < cal.kept.size(); ++col) {
+      const Index j = cal.kept[col];
+      if (j < 6) continue;
+      m.parameters.push_back({cal.kept_names[col], c.structural.size() > 0 ? c.structural(j) : 0.0, se(col), true});
+    }
+    for (const std::string& name : cal.dropped_names) m.parameters.push_back({name, 0.0, 0.0, false});
+  }
+  if (est != nullptr && estimator == HybridFineEstimator::Liu) m.settings["liu_d"] = est->liu_d;
+  m.settings["eps_xi"] = cal.coarse_history.empty() ? 0.0 : cal.coarse_history.back().relative_change;
+  m.settings["coarse_iterations"] = static_cast<double>(cal.coarse_history.size());
+  m.settings["rank"] = static_cast<double>(cal.rank);
+  m.settings["condition_number"] = cal.condition_number;
+  m.settings["cal_nodes"] = static_cast<double>(cal.cal_nodes);
+  return m;
+}
+
+HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model) {
+  if (!model.nominal.is_hybrid()) throw InputError("hybrid compensation needs a model of a hybrid robot");
+  HybridCompensation c;
+  c.nominal = model.nominal.hybrid();
+  c.model = std::make_shared<const HybridErrorModel>(c.nominal);
+  c.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
+  static const char* const kLegacy[6] = {"dq1", "dq2", "dq3", "dtheta4", "dtheta5", "dtheta6"};
+  for (const ModelParameter& p : model.parameters) {
+    if (!std::isfinite(p.value)) throw InputError("hybrid compensation: parameter '" + p.name + "' is not finite");
+    int index = c.model->index_of(p.name);
+    if (index < 0) {
+      for (int k = 0; k < 6; ++k)
+        if (p.name == kLegacy[k]) index = k;
+    }
+    if (index < 0)
+      throw InputError("hybrid compensation: parameter '" + p.name +
+                       "' is not a joint offset or a seed 000 source error");
+    if (index < HybridErrorModel::kEncoderCount)
+      c.encoder_offsets(index) += p.value;
+    else
+      c.structural(index) += p.value;
+  }
+  return c;
+}
+
+}  // namespace kincal::identify
