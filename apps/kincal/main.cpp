@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/model.hpp"
@@ -136,10 +137,33 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   if (estimator == "liu") std::cout << ", Liu d = " << c.liu.liu_d;
   std::cout << "\n  fit residual rms " << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows)))
             << " um per gauge coordinate\n";
-  const ki::CalibrationModel model =
-      ki::hybrid_model(robot, c, estimator == "liu" ? ki::HybridFineEstimator::Liu : ki::HybridFineEstimator::Ols, a.data);
+  // Nodes inconsistent with the others (deleted-node F test on the fine
+  // design); reported, not excluded.
+  std::vector<std::string> outliers;
+  double p_threshold = 0;
+  if (c.fine_done) {
+    const ki::OutlierReport o = ki::detect_outliers(c.fine_problem);
+    p_threshold = o.p_threshold;
+    for (const Eigen::Index k : o.outlying_nodes) outliers.push_back(c.cal_ids[std::size_t(k)]);
+  }
+  if (outliers.empty()) {
+    std::cout << "  outliers: none (deleted-node F test, p < " << p_threshold << ")\n";
+  } else {
+    std::cout << "  nodes inconsistent with the others (reported, not excluded):";
+    for (const std::string& id : outliers) std::cout << " " << id;
+    std::cout << "\n";
+  }
+  const ki::HybridFineEstimator which = estimator == "liu" ? ki::HybridFineEstimator::Liu : ki::HybridFineEstimator::Ols;
+  const ki::HybridCompensation comp = c.compensation(which);
+  const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
+  const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
+  std::cout << "\nresiduals before calibration (pose error from the gauge, measured - nominal model):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+  const ki::CalibrationModel model = ki::hybrid_model(robot, c, which, a.data);
   ki::write_model_file(model, a.out);
-  std::cout << "model written to " << a.out << "\n";
+  std::cout << "\nmodel written to " << a.out << "\n";
   if (!a.json.empty()) {
     nlohmann::json j;
     j["robot"] = robot.name;
@@ -153,7 +177,15 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["liu_d"] = c.liu.liu_d;
     j["coarse_iterations"] = c.coarse_history.size();
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
-    j["outliers"] = nlohmann::json::array();  // node screening of the hybrid: not yet (issue #3)
+    j["outliers"] = outliers;
+    j["outlier_p_threshold"] = p_threshold;
+    nlohmann::json res_before, res_after;
+    res_before["all"] = stats_json(before.all);
+    res_after["all"] = stats_json(after.all);
+    for (const auto& [name, st] : before.groups) res_before[name] = stats_json(st);
+    for (const auto& [name, st] : after.groups) res_after[name] = stats_json(st);
+    j["residual_before"] = res_before;
+    j["residual"] = res_after;
     std::ofstream f(a.json);
     if (!f) throw ki::InputError(a.json, 0, 0, "cannot open for writing");
     f << j.dump(2) << "\n";

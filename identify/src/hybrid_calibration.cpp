@@ -116,6 +116,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   out.nominal = g0;
   out.gauge_radius = radius;
   out.cal_nodes = nodes.size();
+  for (const Node& n : nodes) out.cal_ids.push_back(n.id);
   const HybridErrorModel model(g0);
   const auto& params = model.parameters();
   MatrixXd B(6, HybridErrorModel::kParameterCount);
@@ -413,6 +414,55 @@ HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model)
       c.structural(index) += p.value;
   }
   return c;
+}
+
+PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation* compensation, const PoseTable& data) {
+  if (!nominal.is_hybrid()) throw InputError("hybrid_residuals needs a hybrid robot");
+  const HybridGeometry<double>& g0 = nominal.hybrid();
+  const HybridGeometry<double> g = compensation != nullptr ? compensation->controller_geometry() : g0;
+  const bool structural = compensation != nullptr && compensation->structural.size() > 0;
+  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  std::vector<PoseErrorRow> rows;
+  std::size_t skipped = 0;
+  for (const PoseRow& row : data.rows) {
+    if (!row.targets || !usable_status(row.status)) {
+      ++skipped;
+      continue;
+    }
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    HybridPassive<double> guess = g0.home;
+    Vec6<double> q;
+    const Status ik = hybrid_ik(g0, commanded, q, nullptr, &guess);
+    if (row.q && row.q->size() == 6) {
+      q = *row.q;
+    } else if (ik != Status::Ok) {
+      ++skipped;
+      continue;
+    }
+    Pose<double> predicted;
+    if (hybrid_fk(g, q, guess, predicted).status != Status::Ok) {
+      ++skipped;
+      continue;
+    }
+    if (structural) {
+      if (compensation->model->error_jacobian(commanded, B) != Status::Ok) {
+        ++skipped;
+        continue;
+      }
+      predicted = apply_twist(predicted, Twist<double>(B * compensation->structural));
+    }
+    Eigen::Matrix<double, 9, 1> measured;
+    for (int k = 0; k < 9; ++k) measured(k) = row.targets->data()[k];
+    const Eigen::Matrix<double, 9, 1> dp = measured - targets9(g0, nominal.gauge_radius, predicted);
+    const Eigen::Matrix<double, 9, 6> P = gauge_map(g0, nominal.gauge_radius, predicted);
+    PoseErrorRow r;
+    r.id = row.id;
+    r.group = data.has_layer && row.layer ? "layer " + std::to_string(*row.layer) : std::string();
+    r.role = row.role;
+    r.error = P.colPivHouseholderQr().solve(dp);
+    rows.push_back(r);
+  }
+  return make_pose_error_report(std::move(rows), skipped);
 }
 
 }  // namespace kincal::identify

@@ -38,6 +38,13 @@ PoseErrorReport finish(PoseErrorReport report) {
 
 }  // namespace
 
+PoseErrorReport make_pose_error_report(std::vector<PoseErrorRow> rows, std::size_t skipped) {
+  PoseErrorReport report;
+  report.rows = std::move(rows);
+  report.skipped = skipped;
+  return finish(std::move(report));
+}
+
 PoseErrorStats summarize(const std::vector<PoseErrorRow>& rows) {
   PoseErrorStats s;
   s.count = rows.size();

@@ -21,6 +21,7 @@
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -68,6 +69,7 @@ struct HybridCalibration {
   HybridGeometry<double> nominal;
   double gauge_radius = 0;
   std::size_t cal_nodes = 0;
+  std::vector<std::string> cal_ids;  // the cal nodes in fit order (node k of fine_problem.row_node)
 
   // coarse (Eq. (15))
   Vec6<double> coarse_xi = Vec6<double>::Zero();
@@ -136,6 +138,15 @@ struct HybridMonteCarlo {
 // PreparedDesign (one SVD).
 HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int runs, double sigma_mm,
                                     std::uint64_t seed = 1);
+
+// Residuals of the data against a compensation's model of the machine (or the
+// nominal machine when `compensation` is null), every row with gauge targets:
+// the machine as modelled (ideal FK with the encoder offsets, then the
+// predicted error twist B·Δχ̂) gives predicted targets; the 9 target residuals
+// are turned into the node's pose error twist by least squares through the
+// gauge map of Eq. (9). Grouped by role and layer, so test rows are evaluated
+// on a model that never saw them.
+PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation* compensation, const PoseTable& data);
 
 // ---- MODEL.json -------------------------------------------------------------
 

@@ -45,6 +45,10 @@ PoseErrorReport pose_differences(const PoseTable& a, const PoseTable& b);
 
 PoseErrorStats summarize(const std::vector<PoseErrorRow>& rows);
 
+// A report from rows computed elsewhere (e.g. gauge residuals turned into pose
+// error twists): overall and per role / layer statistics.
+PoseErrorReport make_pose_error_report(std::vector<PoseErrorRow> rows, std::size_t skipped);
+
 // Human-readable report: per-row table (optional) and the summary per group.
 void print_pose_error_report(const PoseErrorReport& report, std::ostream& out, bool per_row);
 
