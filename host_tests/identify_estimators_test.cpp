@@ -17,6 +17,7 @@
 
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "random_design.hpp"
 
 using namespace kincal::identify;
 using Eigen::Index;
@@ -25,13 +26,7 @@ using Eigen::VectorXd;
 
 namespace {
 
-MatrixXd gaussian(Index rows, Index cols, std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  MatrixXd A(rows, cols);
-  for (Index j = 0; j < cols; ++j)
-    for (Index i = 0; i < rows; ++i) A(i, j) = g(rng);
-  return A;
-}
+using kincal::test::gaussian;  // random_design.hpp
 
 VectorXd gaussian(Index rows, std::mt19937_64& rng) { return gaussian(rows, 1, rng).col(0); }
 

@@ -15,6 +15,7 @@
 
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "random_design.hpp"
 
 using namespace kincal::identify;
 using Eigen::Index;
@@ -23,13 +24,7 @@ using Eigen::VectorXd;
 
 namespace {
 
-MatrixXd gaussian(Index rows, Index cols, std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  MatrixXd A(rows, cols);
-  for (Index j = 0; j < cols; ++j)
-    for (Index i = 0; i < rows; ++i) A(i, j) = g(rng);
-  return A;
-}
+using kincal::test::gaussian;  // random_design.hpp
 
 bool contains(const std::vector<Index>& v, Index x) { return std::find(v.begin(), v.end(), x) != v.end(); }
 

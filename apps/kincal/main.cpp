@@ -117,6 +117,23 @@ nlohmann::json stats_json(const ki::PoseErrorStats& s) {
           {"mean_orientation_urad", 1e6 * s.mean_orientation_rad}};
 }
 
+// SUMMARY.json: the identification's own fields plus the residuals before and
+// after calibration, overall and per role / layer.
+void write_summary(nlohmann::json j, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after,
+                   const std::string& path) {
+  auto groups = [](const ki::PoseErrorReport& r) {
+    nlohmann::json out;
+    out["all"] = stats_json(r.all);
+    for (const auto& [name, st] : r.groups) out[name] = stats_json(st);
+    return out;
+  };
+  j["residual_before"] = groups(before);
+  j["residual"] = groups(after);
+  std::ofstream f(path);
+  if (!f) throw ki::InputError(path, 0, 0, "cannot open for writing");
+  f << j.dump(2) << "\n";
+}
+
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
 // the identifiable source errors by Liu (Eq. (11), d of Eq. (14)) or OLS.
 int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
@@ -179,16 +196,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
     j["outliers"] = outliers;
     j["outlier_p_threshold"] = p_threshold;
-    nlohmann::json res_before, res_after;
-    res_before["all"] = stats_json(before.all);
-    res_after["all"] = stats_json(after.all);
-    for (const auto& [name, st] : before.groups) res_before[name] = stats_json(st);
-    for (const auto& [name, st] : after.groups) res_after[name] = stats_json(st);
-    j["residual_before"] = res_before;
-    j["residual"] = res_after;
-    std::ofstream f(a.json);
-    if (!f) throw ki::InputError(a.json, 0, 0, "cannot open for writing");
-    f << j.dump(2) << "\n";
+    write_summary(j, before, after, a.json);
   }
   return 0;
 }
@@ -263,16 +271,7 @@ int run_identify(const IdentifyArgs& a) {
       tests.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
     j["node_tests"] = tests;
     j["outlier_p_threshold"] = c.outlier_p_threshold;
-    nlohmann::json res_before, res_after;
-    res_before["all"] = stats_json(before.all);
-    res_after["all"] = stats_json(after.all);
-    for (const auto& [name, st] : before.groups) res_before[name] = stats_json(st);
-    for (const auto& [name, st] : after.groups) res_after[name] = stats_json(st);
-    j["residual_before"] = res_before;
-    j["residual"] = res_after;
-    std::ofstream f(a.json);
-    if (!f) throw ki::InputError(a.json, 0, 0, "cannot open for writing");
-    f << j.dump(2) << "\n";
+    write_summary(j, before, after, a.json);
   }
   return 0;
 }
