@@ -1,0 +1,365 @@
+// Compensation on the controller: one NC point at a time, allocation-free,
+// the same routine for the firmware and for `kincal compensate` on the host.
+//
+// Model and workspace apart (pinocchio's Model/Data): a Compensator is built
+// once from an immutable CalibrationTable (core/calibration_table.hpp, checked
+// by validate_table) and never changes; the caller owns a CompensatorState
+// with what the controller remembers between points (the last safe command,
+// each joint's approach direction, event counters per status).
+//
+// Per NC point (docs/compensation.md):
+//   1. the nominal pose (and temperature, if given) must be finite;
+//   2. the nominal configuration of that pose: its nominal IK command q_nom
+//      (the reference of the correction bound) and, where needed, the static
+//      joint load of a unit weight (compliance) — evaluated there, like
+//      identify's effect nodes;
+//   3. thermal: the pose is pre-scaled about the base origin by 1/(1 + ε),
+//      ε = c·(T − T0) (core/effects.hpp);
+//   4. geometry:
+//        hybrid (seed 000 Eq. (16)): $_t = B(pose)·Δχ̂ (hybrid_error_twist.hpp,
+//          at the nominal configuration), corrected pose = apply_twist(pose, −$_t),
+//          q* = ideal IK of the corrected pose with the encoder offsets ξ̂;
+//        6-UPS (seed 001): q* = IK of the calibrated geometry;
+//   5. joint-space effects (scale, backlash, compliance, cyclic): the command q
+//      with q + Δq(q) = q* (effect_correct_joints); the backlash direction of
+//      joint i is the sign of the change of q*_i from the last accepted point,
+//      kept while the joint stands still (or the NC point's explicit
+//      directions);
+//   6. checks: |q − q_nom| ≤ bounds.max_correction (else OversizedCorrection),
+//      bounds.min_joint ≤ q ≤ bounds.max_joint (else OutOfLimits).
+// On Ok the command is written and remembered. On any failure the command
+// output is the last safe command (held), the state's counter of that status
+// is incremented, and nothing else changes; no NaN ever leaves.
+#pragma once
+
+#include <cstdint>
+
+#include "kincal/core/calibration_table.hpp"
+#include "kincal/core/compensation_status.hpp"
+#include "kincal/core/effects.hpp"
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/hybrid_error_twist.hpp"
+#include "kincal/core/stewart.hpp"
+
+namespace kincal {
+
+// One NC point.
+template <class Scalar> struct NcPoint {
+  Pose<Scalar> pose;                 // nominal pose, in the machine's pose frame
+  Scalar temperature = Scalar(0);    // structure temperature, °C (thermal effect)
+  bool has_temperature = false;      // false: the table's T0 (no thermal correction)
+  // Explicit approach directions (±1) for the backlash effect; null: derived
+  // from the command sequence. Must stay valid during the call only.
+  const Vec6<Scalar>* direction = nullptr;
+};
+
+// What the controller remembers between points (the workspace).
+template <class Scalar> struct CompensatorState {
+  // The last safe joint command: the output of every failed point.
+  Vec6<Scalar> command = Vec6<Scalar>::Zero();
+  // Effect-free joint values q* of the last accepted point: the reference the
+  // approach directions are judged against.
+  Vec6<Scalar> reference = Vec6<Scalar>::Zero();
+  // The controller's record of each joint's approach direction (±1).
+  Vec6<Scalar> direction = Vec6<Scalar>::Ones();
+  // Events per status (index = static_cast<int>(CompensationStatus)); [Ok]
+  // counts accepted points.
+  std::uint32_t events[kCompensationStatusCount] = {};
+  CompensationStatus last = CompensationStatus::Ok;
+
+  std::uint32_t count(CompensationStatus s) const { return events[static_cast<int>(s)]; }
+  std::uint32_t failures() const {
+    std::uint32_t n = 0;
+    for (int k = 1; k < kCompensationStatusCount; ++k) n += events[k];
+    return n;
+  }
+};
+using CompensatorStated = CompensatorState<double>;
+using CompensatorStatef = CompensatorState<float>;
+
+// A joint "stands still" when its change is below this × (1 + |q|) (identify's
+// direction rule uses 1e-12 in double).
+template <class Scalar> struct StillTolerance;
+template <> struct StillTolerance<double> {
+  static constexpr double value = 1e-12;
+};
+template <> struct StillTolerance<float> {
+  static constexpr float value = 1e-6f;
+};
+
+namespace compensation_detail {
+
+// The machine-specific half: the controller's copies of the table's geometry.
+template <class Machine> struct Model;
+
+template <class S> struct Model<StewartMachine<S>> {
+  StewartGeometry<S> nominal;
+  StewartGeometry<S> calibrated;
+  void load(const StewartMachine<S>& m) {
+    nominal = to_core(m.nominal);
+    calibrated = to_core(m.calibrated);
+  }
+};
+
+template <class S> struct Model<HybridMachine<S>> {
+  HybridGeometry<S> nominal;     // B is evaluated on it; q_nom
+  HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK of Eq. (16)
+  const S* source_errors = nullptr;  // Δχ̂, read in place from the table
+  S up_split = S(0);
+  bool structural = false;  // any Δχ̂ ≠ 0
+  void load(const HybridMachine<S>& m) {
+    nominal = to_core(m.nominal);
+    controller = nominal;
+    for (int i = 0; i < 6; ++i) controller.joint_offset(i) += m.encoder_offsets[i];
+    source_errors = m.source_errors;
+    up_split = m.up_split;
+    structural = false;
+    for (int k = 0; k < kHybridSourceErrorCount; ++k) structural = structural || m.source_errors[k] != S(0);
+  }
+};
+
+}  // namespace compensation_detail
+
+template <class Machine> class Compensator {
+ public:
+  using Scalar = typename Machine::Scalar;
+  using Table = CalibrationTable<Machine>;
+  using State = CompensatorState<Scalar>;
+  static constexpr MachineFamily family = Machine::family;
+
+  // Checks the table (validate_table) and prepares the controller's copies of
+  // its geometry and effects. The table must outlive the compensator (the
+  // hybrid's Δχ̂ is read in place, so a table in flash stays there). If the
+  // check fails, status() says why and every compensate() returns that status
+  // and holds its output: the caller falls back to a nominal table.
+  explicit Compensator(const Table& table) : table_(&table), status_(validate_table(table)) {
+    if (status_ != CompensationStatus::Ok) return;
+    model_.load(table.machine);
+    effects_ = to_core(table.effects);
+    for (int i = 0; i < 6; ++i) {
+      max_correction_(i) = table.bounds.max_correction[i];
+      min_joint_(i) = table.bounds.min_joint[i];
+      max_joint_(i) = table.bounds.max_joint[i];
+    }
+    joint_effects_ = effects_.joint_effects_present();
+    compliance_ = !effects_.compliance.isZero();
+    thermal_ = effects_.thermal != Scalar(0);
+  }
+
+  CompensationStatus status() const { return status_; }
+  const Table& table() const { return *table_; }
+  const EffectParameters<Scalar>& effects() const { return effects_; }
+
+  // The compensated command at the machine's home pose (6-UPS: the
+  // geometry's home; hybrid: the reference pose, the origin of {R} with the
+  // tool aligned to it), for start().
+  CompensationStatus home_command(Vec6<Scalar>& q) const {
+    State scratch;
+    NcPoint<Scalar> p;
+    p.pose = home_pose();
+    Vec6<Scalar> ideal, dir;
+    return evaluate(scratch, p, q, ideal, dir);
+  }
+
+  Pose<Scalar> home_pose() const {
+    if constexpr (family == MachineFamily::Hybrid) {
+      return Pose<Scalar>();
+    } else {
+      return model_.nominal.home;
+    }
+  }
+
+  // The state at the start of a stream with the machine at joint command
+  // `current` (held until the first accepted point, and the reference of the
+  // first approach directions) and the given approach directions.
+  State start(const Vec6<Scalar>& current, const Vec6<Scalar>& direction = Vec6<Scalar>::Ones()) const {
+    State s;
+    s.command = current;
+    s.reference = current;
+    s.direction = direction;
+    return s;
+  }
+
+  // One NC point (see the file comment). `command` is always written: the new
+  // command on Ok, state.command (held) otherwise.
+  CompensationStatus compensate(State& state, const NcPoint<Scalar>& point, Vec6<Scalar>& command) const {
+    Vec6<Scalar> q, ideal, dir;
+    const CompensationStatus st = evaluate(state, point, q, ideal, dir);
+    state.last = st;
+    ++state.events[static_cast<int>(st)];
+    if (st != CompensationStatus::Ok) {
+      command = state.command;
+      return st;
+    }
+    state.command = q;
+    state.reference = ideal;
+    state.direction = dir;
+    command = q;
+    return st;
+  }
+
+  CompensationStatus compensate(State& state, const Pose<Scalar>& pose, Vec6<Scalar>& command) const {
+    NcPoint<Scalar> p;
+    p.pose = pose;
+    return compensate(state, p, command);
+  }
+
+  CompensationStatus compensate(State& state, const Pose<Scalar>& pose, Scalar temperature,
+                                Vec6<Scalar>& command) const {
+    NcPoint<Scalar> p;
+    p.pose = pose;
+    p.temperature = temperature;
+    p.has_temperature = true;
+    return compensate(state, p, command);
+  }
+
+ private:
+  // The pipeline without touching the state; outputs written only on Ok.
+  CompensationStatus evaluate(const State& state, const NcPoint<Scalar>& point, Vec6<Scalar>& command,
+                              Vec6<Scalar>& ideal_out, Vec6<Scalar>& direction_out) const {
+    using CS = CompensationStatus;
+    if (status_ != CS::Ok) return status_;
+    if (!point.pose.finite() || (point.has_temperature && !is_finite(point.temperature)))
+      return CS::InvalidInput;
+    const Scalar temperature = point.has_temperature ? point.temperature : effects_.reference_temperature;
+    EffectInputs<Scalar> inputs;
+    inputs.load.setZero();
+    Vec6<Scalar> nominal_q, ideal;
+    const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load);
+    if (st != CS::Ok) return st;
+
+    // Approach directions (backlash): explicit, or the sign of the change of
+    // q* since the last accepted point, kept while a joint stands still.
+    Vec6<Scalar> dir = state.direction;
+    if (point.direction != nullptr) {
+      dir = *point.direction;
+      if (!all_finite(dir)) return CS::InvalidInput;
+    } else {
+      for (int i = 0; i < 6; ++i) {
+        const Scalar d = ideal(i) - state.reference(i);
+        const Scalar abs_q = ideal(i) < Scalar(0) ? -ideal(i) : ideal(i);
+        if ((d < Scalar(0) ? -d : d) > StillTolerance<Scalar>::value * (Scalar(1) + abs_q))
+          dir(i) = d > Scalar(0) ? Scalar(1) : Scalar(-1);
+      }
+    }
+    inputs.direction = dir;
+
+    Vec6<Scalar> q = ideal;
+    if (joint_effects_) {
+      const Status es = effect_correct_joints(effects_, ideal, inputs, q);
+      if (es != Status::Ok) return to_compensation_status(es);
+    }
+    if (!all_finite(q)) return CS::InvalidInput;
+    if (((q - nominal_q).cwiseAbs().array() > max_correction_.array()).any()) return CS::OversizedCorrection;
+    if ((q.array() < min_joint_.array()).any() || (q.array() > max_joint_.array()).any()) return CS::OutOfLimits;
+    command = q;
+    ideal_out = ideal;
+    direction_out = dir;
+    return CS::Ok;
+  }
+
+  // Steps 2–4: q_nom, the static load (if compliance is present) and q*.
+  CompensationStatus geometry(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
+                              Vec6<Scalar>& ideal, Vec6<Scalar>& load) const {
+    using CS = CompensationStatus;
+    if constexpr (family == MachineFamily::Stewart6Ups) {
+      // The nominal IK with its Jacobian: the singularity test of the NC point,
+      // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
+      Mat6<Scalar> J;
+      Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
+      if (s != Status::Ok) return to_compensation_status(s);
+      if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
+      const Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      s = stewart_ik(model_.calibrated, target, ideal);  // seed 001: IK of the calibrated geometry
+      return to_compensation_status(s);
+    } else {
+      HybridFrames<Scalar> f;
+      Vec3<Scalar> angles;
+      Status s = hybrid_frames_at_pose(model_.nominal, pose, f, angles);
+      if (s != Status::Ok) return to_compensation_status(s);
+      nominal_q.template head<3>() = f.legs.colwise().norm().transpose();
+      nominal_q.template tail<3>() = angles;
+      nominal_q -= model_.nominal.joint_offset;
+      if (compliance_) {
+        Mat6<Scalar> Jf;
+        if (!hybrid_forward_jacobian(model_.nominal, f, Jf)) return CS::Singular;
+        load = static_load_forward(Jf, effects_.load_direction);
+      }
+      Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      if (model_.structural) {
+        // seed 000 Eq. (16): the predicted error twist at the nominal
+        // configuration, removed from the requested pose before the ideal IK.
+        Twist<Scalar> t;
+        s = hybrid_error_twist(model_.nominal, model_.up_split, f, model_.source_errors, t);
+        if (s != Status::Ok) return to_compensation_status(s);
+        target = apply_twist(target, Twist<Scalar>(-t));
+      }
+      s = hybrid_ik(model_.controller, target, ideal);
+      return to_compensation_status(s);
+    }
+  }
+
+  const Table* table_;
+  CompensationStatus status_;
+  compensation_detail::Model<Machine> model_;
+  EffectParameters<Scalar> effects_;
+  Vec6<Scalar> max_correction_ = Vec6<Scalar>::Zero();
+  Vec6<Scalar> min_joint_ = Vec6<Scalar>::Zero();
+  Vec6<Scalar> max_joint_ = Vec6<Scalar>::Zero();
+  bool joint_effects_ = false, compliance_ = false, thermal_ = false;
+};
+
+template <class S> using StewartCompensator = Compensator<StewartMachine<S>>;
+template <class S> using HybridCompensator = Compensator<HybridMachine<S>>;
+
+// ---- building tables on the controller (fallback) and on the host ------------
+
+// Default bound of the correction per joint: prismatic joints 5 mm, revolute
+// joints 0.02 rad (~1.1°) — a few times the largest source error a calibrated
+// machine of this size is expected to have (seed 000 Table 3, seed 001 Table
+// 3), so a wrong model or input stands out. The host generator may choose others.
+template <class Scalar> TableBounds<Scalar> default_bounds(const StewartGeometry<Scalar>& g) {
+  TableBounds<Scalar> b{};
+  for (int i = 0; i < 6; ++i) {
+    b.max_correction[i] = Scalar(5);
+    b.min_joint[i] = g.min_length(i);
+    b.max_joint[i] = g.max_length(i);
+  }
+  return b;
+}
+template <class Scalar> TableBounds<Scalar> default_bounds(const HybridGeometry<Scalar>& g) {
+  TableBounds<Scalar> b{};
+  for (int i = 0; i < 6; ++i) {
+    b.max_correction[i] = i < 3 ? Scalar(5) : Scalar(0.02);
+    b.min_joint[i] = g.min_joint(i);
+    b.max_joint[i] = g.max_joint(i);
+  }
+  return b;
+}
+
+// The nominal model as a (sealed) table: the firmware's fallback when its
+// calibration table fails validate_table. `effects` carries the machine data
+// (screw lead, weight direction, …) with every effect value zero by default.
+template <class Scalar>
+StewartCalibrationTable<Scalar> nominal_table(const StewartGeometry<Scalar>& g,
+                                              const EffectParameters<Scalar>& effects = EffectParameters<Scalar>()) {
+  StewartCalibrationTable<Scalar> t{};
+  t.machine.nominal = to_table(g);
+  t.machine.calibrated = to_table(g);
+  t.effects = to_table(effects);
+  t.bounds = default_bounds(g);
+  return seal_table(t);
+}
+
+template <class Scalar>
+HybridCalibrationTable<Scalar> nominal_table(const HybridGeometry<Scalar>& g, Scalar up_split = Scalar(345),
+                                             const EffectParameters<Scalar>& effects = EffectParameters<Scalar>()) {
+  HybridCalibrationTable<Scalar> t{};
+  t.machine.nominal = to_table(g);
+  t.machine.up_split = up_split;
+  t.effects = to_table(effects);
+  t.bounds = default_bounds(g);
+  return seal_table(t);
+}
+
+}  // namespace kincal
