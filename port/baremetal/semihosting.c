@@ -10,6 +10,7 @@ enum {
   SYS_WRITE0 = 0x04,
   SYS_WRITE = 0x05,
   SYS_READ = 0x06,
+  SYS_GET_CMDLINE = 0x15,
   SYS_EXIT = 0x18,
   SYS_EXIT_EXTENDED = 0x20
 };
@@ -104,4 +105,14 @@ size_t kincal_semihost_read_file(int handle, void* data, size_t size) {
 int kincal_semihost_close(int handle) {
   const uintptr_t block[1] = {(uintptr_t)handle};
   return semihost_call(SYS_CLOSE, block) == 0 ? 0 : -1;
+}
+
+int kincal_semihost_get_cmdline(char* buffer, size_t size) {
+  if (size == 0) return -1;
+  /* The host writes the line and its length back into the block. */
+  uintptr_t block[2] = {(uintptr_t)buffer, (uintptr_t)size};
+  if (semihost_call(SYS_GET_CMDLINE, block) != 0) return -1;
+  if (block[1] >= size) return -1;
+  buffer[block[1]] = '\0';
+  return 0;
 }

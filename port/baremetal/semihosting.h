@@ -42,6 +42,12 @@ size_t kincal_semihost_read_file(int handle, void* data, size_t size);
 /* Returns 0 on success, -1 on error. */
 int kincal_semihost_close(int handle);
 
+/* The program's command line as the emulator has it (qemu: the -kernel file
+ * name, then the -append text, or the -semihosting-config arg=... list),
+ * NUL-terminated in buffer.  Returns 0, or -1 if the host cannot tell or the
+ * line does not fit (SYS_GET_CMDLINE). */
+int kincal_semihost_get_cmdline(char* buffer, size_t size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,303 @@
+// The controller loop, generic over the port's backends (issue #5 items 2–4).
+//
+//   Controller<Machine, Registers, Stream>
+//     Machine    StewartMachine<S> or HybridMachine<S> (core/calibration_table.hpp):
+//                one machine family per image, so nothing of the other is linked
+//     Registers  an EncoderOffsetPort backend (encoder_registers.hpp)
+//     Stream     an NcStreamPort backend (nc_stream.hpp)
+//
+// Start-up (constructor + start()):
+//   1. the calibration table is checked (validate_table: version, family, CRC,
+//      values and bounds). If it fails, the controller falls back to the
+//      nominal table (the machine's nominal model, generated next to it) and
+//      says so: StartReport::table holds the failure, every command carries
+//      kCommandNominalModel. If the nominal table fails too, the compensator
+//      refuses every point with the table's status and holds its output.
+//   2. the coarse calibration's encoder offsets (hybrid: ξ̂ of seed 000 Eq.
+//      (15); 6-UPS: the leg offsets dl_i of seed 001 Table 3) are written to
+//      the encoder-offset registers in counts and verified by read-back, each
+//      with a bounded number of attempts. If a channel cannot be verified the
+//      drives' zero is not the one the model assumes, so the controller
+//      refuses motion: every point is answered with the held output and the
+//      register failure as its port status (counted once per channel at
+//      start-up, and per point as a held command).
+//
+// Per interpolation period, step():
+//   - a command the drives refused last period (output overrun) is sent
+//     again first, and no new point is taken until it is gone: back-pressure
+//     instead of loss;
+//   - otherwise one NC point is taken: none available is an underrun (the
+//     drives hold their last command); its sequence number is checked against
+//     the previous one (a gap or a step back is counted and flagged: points
+//     lost before the port), producer overruns reported with it are counted;
+//   - the point is compensated (core/compensation.hpp: status per failure,
+//     held output, events counted in the compensator state) and its command
+//     sent with the point's sequence number, status and flags. Every point
+//     taken is answered exactly once, in order.
+//
+// Frames. The compensator computes the command q in the joint frame of the
+// model (`kincal compensate`'s numbers: the physical joint is q + ξ̂). A
+// drive with its offset register set to R counts positions as raw encoder
+// + R, so it is sent q_drive = q + R (R in joint units, as read back), and
+// servos its raw encoder to q_drive − R = q: the register makes the drive's
+// own frame the calibrated one (its position feedback, its limits), and the
+// motion is exactly the model's whatever R holds, as long as R is what the
+// read-back said. This is why an unverified register stops the machine.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "kincal/core/calibration_table.hpp"
+#include "kincal/core/compensation.hpp"
+#include "kincal/port/encoder_registers.hpp"
+#include "kincal/port/nc_stream.hpp"
+#include "kincal/port/port_status.hpp"
+
+namespace kincal::port {
+
+template <class Scalar> struct ControllerConfig {
+  EncoderOffsetScaling<Scalar> scaling;  // counts of the offset registers
+  int register_attempts = 3;             // write + read-back tries per channel
+  // Where the machine is at power-up (a real port reads it from the drives);
+  // the held output until the first accepted point. Without it: the
+  // compensated command at the machine's home pose.
+  bool has_initial_command = false;
+  Vec6<Scalar> initial_command = Vec6<Scalar>::Zero();
+};
+
+struct ControllerCounters {
+  std::uint32_t points = 0;             // NC points answered (one command each)
+  std::uint32_t compensated = 0;        // ... with a new command (status Ok, not held)
+  std::uint32_t held = 0;               // ... with the held output
+  std::uint32_t sequence_errors = 0;    // gaps or steps back in the sequence numbers
+  std::uint32_t missing_points = 0;     // points missing in those gaps
+  std::uint32_t producer_overruns = 0;  // input queue full (reported with the points)
+  std::uint32_t underruns = 0;          // periods without an NC point
+  std::uint32_t output_overruns = 0;    // sends refused by the drives (command kept, resent)
+  std::uint32_t malformed = 0;          // records that could not be parsed
+  std::uint32_t io_errors = 0;          // stream failures
+  std::uint32_t register_failures = 0;  // channels whose offset could not be verified
+  std::uint32_t register_retries = 0;   // failed attempts that a later attempt repaired
+  std::uint32_t table_failures = 0;     // tables rejected at start-up
+};
+
+struct StartReport {
+  CompensationStatus table = CompensationStatus::Ok;     // validate_table of the calibration table
+  CompensationStatus fallback = CompensationStatus::Ok;  // of the nominal table, if it was needed
+  bool nominal = false;                                  // running on the nominal table
+  PortStatus registers = PortStatus::Ok;                 // Ok or the first register failure
+  int register_channel = -1;                             // the channel that failed
+  std::int32_t counts[kEncoderChannels] = {};            // what the registers hold (read back)
+  bool ready() const {
+    return registers == PortStatus::Ok && (table == CompensationStatus::Ok || fallback == CompensationStatus::Ok);
+  }
+};
+
+// What one period did.
+enum class Cycle : std::uint8_t {
+  Command,        // a point was answered (or a refused command finally sent)
+  Underrun,       // no point this period
+  OutputBlocked,  // the drives refused the command: it is kept for the next period
+  End,            // the NC program has ended and every command is out
+  Error,          // the stream failed
+};
+
+template <class Machine, class Registers, class Stream> class Controller {
+ public:
+  using Scalar = typename Machine::Scalar;
+  using Table = CalibrationTable<Machine>;
+
+  Controller(Registers& registers, Stream& stream, const Table& calibration, const Table& nominal,
+             const ControllerConfig<Scalar>& config = ControllerConfig<Scalar>())
+      : registers_(registers),
+        stream_(stream),
+        config_(config),
+        report_(check_tables(calibration, nominal)),
+        compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal) {
+    counters_.table_failures =
+        (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
+    Vec6<Scalar> initial = config_.initial_command;
+    if (!config_.has_initial_command && compensator_.home_command(initial) != CompensationStatus::Ok)
+      initial = config_.initial_command;
+    state_ = compensator_.start(initial);
+  }
+
+  // Writes and verifies the encoder offsets (see the file comment).
+  const StartReport& start() {
+    const Vec6<Scalar> offsets = encoder_offsets(compensator_.table());
+    for (int ch = 0; ch < kEncoderChannels; ++ch) {
+      PortStatus st = config_.scaling.to_counts(ch, offsets(ch), report_.counts[ch]);
+      const std::int32_t want = report_.counts[ch];
+      int failed_attempts = 0;
+      if (st == PortStatus::Ok) {
+        for (int attempt = 0; attempt < config_.register_attempts; ++attempt) {
+          std::int32_t back = 0;
+          st = registers_.write_verified(ch, want, back);
+          if (st == PortStatus::Ok) break;
+          ++failed_attempts;
+        }
+      }
+      std::int32_t held = 0;
+      if (registers_.read(ch, held) == PortStatus::Ok) {
+        report_.counts[ch] = held;
+        drive_offset_(ch) = config_.scaling.to_joint(ch, held);
+      }
+      if (st != PortStatus::Ok) {
+        ++counters_.register_failures;
+        if (report_.registers == PortStatus::Ok) {
+          report_.registers = st;
+          report_.register_channel = ch;
+        }
+      } else {
+        counters_.register_retries += static_cast<std::uint32_t>(failed_attempts);
+      }
+    }
+    started_ = true;
+    return report_;
+  }
+
+  // One interpolation period (see the file comment).
+  Cycle step() {
+    if (!started_) start();
+    if (has_pending_) {
+      const PortStatus s = stream_.send(pending_);
+      if (s == PortStatus::Overrun) {
+        ++counters_.output_overruns;
+        return Cycle::OutputBlocked;
+      }
+      if (s != PortStatus::Ok) {
+        ++counters_.io_errors;
+        return Cycle::Error;
+      }
+      has_pending_ = false;
+      return Cycle::Command;
+    }
+    NcInput<Scalar> in;
+    const PortStatus r = stream_.receive(in);
+    switch (r) {
+      case PortStatus::Ok:
+      case PortStatus::Malformed: break;
+      case PortStatus::Underrun: ++counters_.underruns; return Cycle::Underrun;
+      case PortStatus::EndOfStream: return Cycle::End;
+      default: ++counters_.io_errors; return Cycle::Error;
+    }
+    JointCommand<Scalar> cmd = answer(in, r == PortStatus::Malformed);
+    const PortStatus s = stream_.send(cmd);
+    if (s == PortStatus::Overrun) {
+      ++counters_.output_overruns;
+      pending_ = cmd;
+      has_pending_ = true;
+      return Cycle::OutputBlocked;
+    }
+    if (s != PortStatus::Ok) {
+      ++counters_.io_errors;
+      return Cycle::Error;
+    }
+    return Cycle::Command;
+  }
+
+  // Runs step() until the stream ends or fails, at most `max_periods` times.
+  Cycle run(std::uint32_t max_periods = 0xFFFFFFFFu) {
+    Cycle c = Cycle::Command;
+    for (std::uint32_t k = 0; k < max_periods; ++k) {
+      c = step();
+      if (c == Cycle::End || c == Cycle::Error) break;
+    }
+    return c;
+  }
+
+  const StartReport& report() const { return report_; }
+  const ControllerCounters& counters() const { return counters_; }
+  const CompensatorState<Scalar>& state() const { return state_; }
+  const Compensator<Machine>& compensator() const { return compensator_; }
+  // The register offsets in joint units, as read back (the drive frame's shift).
+  const Vec6<Scalar>& drive_offset() const { return drive_offset_; }
+
+  // The coarse calibration's encoder offsets of a table, in joint units.
+  static Vec6<Scalar> encoder_offsets(const Table& t) {
+    Vec6<Scalar> o;
+    for (int i = 0; i < 6; ++i) {
+      if constexpr (Machine::family == MachineFamily::Hybrid) {
+        o(i) = t.machine.encoder_offsets[i];
+      } else {
+        // seed 001: l_i = q_i + dl_i, the leg's encoder zero error.
+        o(i) = t.machine.calibrated.length_offset[i] - t.machine.nominal.length_offset[i];
+      }
+    }
+    return o;
+  }
+
+ private:
+  static StartReport check_tables(const Table& calibration, const Table& nominal) {
+    StartReport r;
+    r.table = validate_table(calibration);
+    if (r.table != CompensationStatus::Ok) {
+      r.nominal = true;
+      r.fallback = validate_table(nominal);
+    }
+    return r;
+  }
+
+  JointCommand<Scalar> answer(const NcInput<Scalar>& in, bool malformed) {
+    JointCommand<Scalar> cmd;
+    cmd.sequence = in.sequence;
+    ++counters_.points;
+    // Sequence numbers: each point should follow the previous one.
+    if (have_last_sequence_ && in.sequence != last_sequence_ + 1u) {
+      ++counters_.sequence_errors;
+      if (in.sequence > last_sequence_) counters_.missing_points += in.sequence - last_sequence_ - 1u;
+      cmd.flags |= kCommandSequenceGap;
+    }
+    have_last_sequence_ = true;
+    last_sequence_ = in.sequence;
+    if (in.producer_overruns > 0) {
+      counters_.producer_overruns += in.producer_overruns;
+      cmd.flags |= kCommandAfterInputOverrun;
+    }
+    if (report_.nominal) cmd.flags |= kCommandNominalModel;
+
+    Vec6<Scalar> q;
+    if (report_.registers != PortStatus::Ok) {
+      // No verified encoder zero: no motion (see the file comment).
+      cmd.port = report_.registers;
+      q = state_.command;
+      cmd.flags |= kCommandHeld;
+    } else {
+      kincal::NcPoint<Scalar> p;
+      if (malformed || !in.valid) {
+        // An unparsable record is an invalid input like a NaN: the
+        // compensator counts it and holds.
+        ++counters_.malformed;
+        const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+        p.pose.p = Vec3<Scalar>::Constant(nan);
+      } else {
+        p.pose = Pose<Scalar>::from_xyz_rpy(in.pose);
+        p.temperature = in.temperature;
+        p.has_temperature = in.has_temperature;
+      }
+      cmd.status = compensator_.compensate(state_, p, q);
+      if (cmd.status != CompensationStatus::Ok) cmd.flags |= kCommandHeld;
+    }
+    if ((cmd.flags & kCommandHeld) != 0)
+      ++counters_.held;
+    else
+      ++counters_.compensated;
+    cmd.q = q + drive_offset_;
+    return cmd;
+  }
+
+  Registers& registers_;
+  Stream& stream_;
+  ControllerConfig<Scalar> config_;
+  StartReport report_;
+  ControllerCounters counters_;
+  Compensator<Machine> compensator_;
+  CompensatorState<Scalar> state_;
+  Vec6<Scalar> drive_offset_ = Vec6<Scalar>::Zero();
+  JointCommand<Scalar> pending_;
+  std::uint32_t last_sequence_ = 0;
+  bool have_last_sequence_ = false, has_pending_ = false, started_ = false;
+};
+
+}  // namespace kincal::port
