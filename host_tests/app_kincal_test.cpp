@@ -189,9 +189,9 @@ TEST(appKincal, ErrorsAreOneLineWithPosition) {
   }
   {
     const ToolRun r = run_tool("simulate --robot stewart-seed001 --poses \"" + poses + "\" --out \"" + kDir +
-                         "/x.csv\" --effect scale:s1=1e-4");
+                         "/x.csv\" --effect scale:s9=1e-4");
     EXPECT_EQ(r.code, 1);
-    EXPECT_EQ(r.err.rfind("kincal: effect 'scale' is not available yet", 0), 0u) << r.err;
+    EXPECT_EQ(r.err.rfind("kincal: effect 'scale' has no parameter 's9' for robot stewart-seed001", 0), 0u) << r.err;
   }
   {
     const ToolRun r = run_tool("simulate --robot stewart-seed001 --poses \"" + poses + "\" --out \"" + kDir +

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/effects.hpp"
 #include "kincal/identify/parameters.hpp"
 
 namespace ki = kincal::identify;
@@ -95,18 +96,23 @@ TEST(identifyParameters, OtherBadInput) {
   EXPECT_TRUE(ki::parse_parameters("name,value\n", "p.csv", s).values.empty());
 }
 
-TEST(identifyParameters, EffectsAreParsedAndHonestlyRejected) {
+TEST(identifyParameters, EffectOptionsAreParsedAndCheckedAgainstTheRegistry) {
   const ki::EffectSetting e = ki::parse_effect_option("scale:s1=1e-4");
   EXPECT_EQ(e.effect, "scale");
   EXPECT_EQ(e.parameter, "s1");
   EXPECT_EQ(e.value, 1e-4);
+  const ki::Robot robot = ki::builtin_robot("stewart-seed001");
+  ki::EffectValues values;
+  values.set(robot, e.effect, e.parameter, e.value);
+  EXPECT_EQ(values.to_core(robot).scale(0), 1e-4);
   try {
-    ki::check_effects_available({e});
-    FAIL() << "effects must not be accepted yet";
+    values.set(robot, "warp", "s1", 1.0);
+    FAIL() << "unknown effect accepted";
   } catch (const ki::InputError& err) {
-    EXPECT_TRUE(contains(err.what(), "effect 'scale' is not available yet")) << err.what();
+    EXPECT_TRUE(contains(err.what(), "unknown effect 'warp' (known: scale, backlash, compliance, thermal, cyclic")) << err.what();
   }
-  EXPECT_NO_THROW(ki::check_effects_available({}));
+  EXPECT_THROW(values.set(robot, "scale", "s7", 1.0), ki::InputError);
+  EXPECT_THROW(values.set(ki::builtin_robot("hybrid-seed000"), "cyclic", "a4", 1.0), ki::InputError);
   for (const std::string bad : {"scale", "scale:s1", "scale:=1", ":s1=1", "scale:s1=", "scale:s1=abc", "scale:s1=nan"})
     EXPECT_THROW(ki::parse_effect_option(bad), ki::InputError) << bad;
 }

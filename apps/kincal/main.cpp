@@ -27,6 +27,7 @@
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 #include "kincal/identify/version.hpp"
+#include "commands.hpp"
 
 namespace ki = kincal::identify;
 
@@ -48,9 +49,11 @@ int run_simulate(const SimulateArgs& a) {
   const ki::Robot nominal = ki::load_robot(a.robot);
   ki::ParameterSet errors;
   if (!a.errors.empty()) errors = ki::read_parameters(a.errors, nominal, warn);
-  std::vector<ki::EffectSetting> effects;
-  for (const std::string& e : a.effects) effects.push_back(ki::parse_effect_option(e));
-  ki::check_effects_available(effects);
+  ki::EffectValues effects;
+  for (const std::string& e : a.effects) {
+    const ki::EffectSetting setting = ki::parse_effect_option(e);
+    effects.set(nominal, setting.effect, setting.parameter, setting.value);
+  }
   const ki::Robot actual = ki::apply_parameters(nominal, errors);
 
   ki::PoseTableOptions popt;
@@ -62,6 +65,7 @@ int run_simulate(const SimulateArgs& a) {
   sopt.noise_mm = a.noise_mm;
   sopt.noise_rad = a.noise_rad;
   sopt.seed = a.seed;
+  sopt.effects = effects;
   ki::SimulateReport report;
   const ki::PoseTable out = ki::simulate(nominal, actual, poses, sopt, report, warn);
   if (report.simulated == 0)
@@ -340,7 +344,9 @@ int run(int argc, char** argv) {
   simulate->add_option("--poses", sim.poses, "commanded poses CSV")->required();
   simulate->add_option("--out", sim.out, "measurement CSV to write")->required();
   simulate->add_option("--errors", sim.errors, "parameter errors CSV (name,value)");
-  simulate->add_option("--effect", sim.effects, "NAME:PARAM=VALUE (effects library: later issue)");
+  simulate->add_option("--effect", sim.effects,
+                       "NAME:PARAM=VALUE, a physical effect of the actual machine (repeatable; e.g. scale:s1=1e-4, "
+                       "thermal:c=1.2e-5; 'kincal effects' lists them)");
   simulate->add_option("--noise-mm", sim.noise_mm, "sigma of Gaussian noise on positions, mm (default 0)");
   simulate->add_option("--noise-rad", sim.noise_rad, "sigma of Gaussian noise on angles, rad (default 0)");
   simulate->add_option("--seed", sim.seed, "noise seed (std::mt19937_64, default 1)")
@@ -388,13 +394,11 @@ int run(int argc, char** argv) {
   compensate->add_option("--poses", comp_poses, "requested poses CSV")->required();
   compensate->add_option("--out", comp_out, "JOINTS.csv to write (id, x..rz, q1..q6)")->required();
 
+  kincal_app::DiagnoseArgs diag;
+  CLI::App* diagnose = kincal_app::add_diagnose_command(app, diag);
+
   // Registered with their GUIDE options so scripts fail loudly and usefully.
-  std::string s1, s2, s3, s4;
-  CLI::App* diagnose = app.add_subcommand("diagnose", "diagnose residuals (not implemented yet)");
-  diagnose->add_option("--robot", s1)->required();
-  diagnose->add_option("--data", s2)->required();
-  diagnose->add_option("--json", s3)->required();
-  diagnose->add_option("--report", s4);
+  std::string s1, s2;
   CLI::App* table = app.add_subcommand("table", "generate a calibration table header (not implemented yet)");
   table->add_option("--model", s1)->required();
   table->add_option("--out", s2)->required();
@@ -426,7 +430,7 @@ int run(int argc, char** argv) {
   if (*robot) return run_robot(robot_name, robot_out, list_params);
   if (*errors) return run_errors(errors_data, errors_reference, errors_rows);
   if (*identify) return run_identify(ident);
-  if (*diagnose) return not_implemented("diagnose", "issue #4: residual diagnosis and the physical-effect library");
+  if (*diagnose) return kincal_app::run_diagnose(diag);
   if (*compensate) return run_compensate(comp_robot, comp_model, comp_poses, comp_out);
   if (*table) return not_implemented("table", "issue #5: generated calibration tables for the firmware");
   return kExitUsage;

@@ -168,11 +168,4 @@ EffectSetting parse_effect_option(const std::string& text) {
   return e;
 }
 
-void check_effects_available(const std::vector<EffectSetting>& effects) {
-  for (const EffectSetting& e : effects)
-    throw InputError("effect '" + e.effect +
-                     "' is not available yet: the physical-effect library (scale, backlash, compliance, thermal, "
-                     "cyclic) comes with a later issue; only --errors PARAMS.csv is supported now");
-}
-
 }  // namespace kincal::identify

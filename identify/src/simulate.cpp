@@ -32,7 +32,14 @@ struct RowResult {
 
 // `sources`: the erroneous machine with seed 000's source errors (hybrid with
 // Robot::source_errors set), or null for the ideal chain of `actual`.
-RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorModel* sources, const PoseRow& row) {
+// `effects`: the machine's physical effects (null: none) with the row's node.
+struct RowEffects {
+  const EffectParameters<double>* parameters = nullptr;
+  const EffectNode* node = nullptr;
+};
+
+RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorModel* sources, const PoseRow& row,
+                  const RowEffects& effects) {
   RowResult out;
   const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
   Vec6<double> q;
@@ -44,9 +51,12 @@ RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorMo
       out.stage = "inverse kinematics of the commanded pose";
       if (out.status != Status::Ok) return out;
     }
+    if (effects.node != nullptr) q += effect_joint_error(*effects.parameters, q, effects.node->inputs);
     // seed 001 §5.2: the error-free commands drive the error-containing FK.
     out.status = stewart_fk(actual.stewart(), q, commanded, out.pose).status;
     out.stage = "forward kinematics of the erroneous machine";
+    if (out.status == Status::Ok && effects.node != nullptr && row.temp)
+      out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
     return out;
   }
   HybridPassive<double> passive = nominal.hybrid().home;
@@ -61,9 +71,12 @@ RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorMo
     if (ik != Status::Ok) return out;
     q = q_ik;
   }
+  if (effects.node != nullptr) q += effect_joint_error(*effects.parameters, q, effects.node->inputs);
   out.status = sources != nullptr ? sources->actual_fk(actual.source_errors, q, passive, out.pose).status
                                   : hybrid_fk(actual.hybrid(), q, passive, out.pose).status;
   out.stage = "forward kinematics of the erroneous machine";
+  if (out.status == Status::Ok && effects.node != nullptr && row.temp)
+    out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
   return out;
 }
 
@@ -91,11 +104,20 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   report = SimulateReport{};
   std::unique_ptr<HybridErrorModel> sources;
   if (actual.is_hybrid() && actual.source_errors.size() > 0) sources = std::make_unique<HybridErrorModel>(actual.hybrid());
-  for (PoseRow& row : out.rows) {
+  const bool with_effects = !options.effects.empty();
+  if (with_effects && options.effects.needs_temperature() && !poses.has_temp)
+    throw InputError(poses.file, 1, 0, "the thermal effect needs a temp column (structure temperature, C)");
+  const EffectParameters<double> effect_parameters = options.effects.to_core(nominal);
+  const std::vector<std::optional<EffectNode>> effect_node =
+      with_effects ? effect_nodes(nominal, poses) : std::vector<std::optional<EffectNode>>{};
+  for (std::size_t index = 0; index < out.rows.size(); ++index) {
+    PoseRow& row = out.rows[index];
     row.measured.reset();
     row.targets.reset();
     row.status = "ok";
-    const RowResult r = run_row(nominal, actual, sources.get(), row);
+    RowEffects effects;
+    if (with_effects && effect_node[index]) effects = {&effect_parameters, &*effect_node[index]};
+    const RowResult r = run_row(nominal, actual, sources.get(), row, effects);
     if (r.status != Status::Ok) {
       row.status = to_string(r.status);
       out.has_status = true;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/identify/effects.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -26,6 +27,9 @@ struct CalibrationModel {
   std::string estimator;                     // "ols", "liu", ...
   std::map<std::string, double> settings;    // estimator settings (e.g. liu_d)
   std::string data_file;                     // the measurement file it came from
+  // Identified physical effects (identify/effects.hpp), "effects" in the
+  // JSON; `effects.to_core(nominal)` is what the controller corrects.
+  EffectValues effects;
 };
 
 // nominal + identified errors (the machine as the model believes it is).

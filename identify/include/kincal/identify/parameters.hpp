@@ -49,13 +49,12 @@ ParameterSet read_parameters(const std::string& path, const Robot& robot,
 // measurement frame, they are not part of the machine).
 Robot apply_parameters(const Robot& nominal, const ParameterSet& errors);
 
-// `--effect NAME:PARAM=VALUE`. Parsed for syntax; the effects library is a
-// later issue, so check_effects_available() rejects every effect name.
+// `--effect NAME:PARAM=VALUE`, parsed for syntax; EffectValues::set
+// (effects.hpp) checks the names against the effect registry.
 struct EffectSetting {
   std::string effect, parameter;
   double value = 0;
 };
 EffectSetting parse_effect_option(const std::string& text);
-void check_effects_available(const std::vector<EffectSetting>& effects);
 
 }  // namespace kincal::identify

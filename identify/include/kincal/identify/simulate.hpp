@@ -10,6 +10,7 @@
 #include <string>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/effects.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -18,6 +19,11 @@ struct SimulateOptions {
   double noise_mm = 0;   // σ of Gaussian noise on mx, my, mz and on each target coordinate
   double noise_rad = 0;  // σ of Gaussian noise on mrx, mry, mrz
   std::uint64_t seed = 1;  // std::mt19937_64 seed; same seed → same noise
+  // Physical effects of the actual machine (core/effects.hpp): joint-space
+  // effects change the joints the FK is driven with (q + Δq at the node's
+  // approach directions and static load), thermal scales the reached pose
+  // about the base origin; needs a temp column when thermal is non-zero.
+  EffectValues effects;
 };
 
 struct SimulateReport {

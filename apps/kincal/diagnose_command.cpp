@@ -1,0 +1,97 @@
+// `kincal diagnose` (GUIDE "Command-line contract"; docs/diagnosis.md).
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "commands.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/diagnosis.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace ki = kincal::identify;
+
+namespace kincal_app {
+
+CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
+  CLI::App* d = app.add_subcommand(
+      "diagnose", "compare the model with measurements: where it fails and which physical effect is missing");
+  d->add_option("--robot", a.robot, "built-in robot name or robot description file")->required();
+  d->add_option("--data", a.data, "measurement CSV (cal rows are fitted, test rows held out)")->required();
+  d->add_option("--json", a.json, "DIAG.json to write")->required();
+  d->add_option("--report", a.report, "REPORT.html to write (self-contained, inline SVG)");
+  d->add_option("--noise-um", a.noise_um,
+                "tracker uncertainty, sigma per measured coordinate in um (6-UPS: orientation counted at 200 mm); "
+                "default: from repeated nodes, else estimated");
+  d->add_option("--effects", a.effects, "candidate effects to test, comma separated (default: all registered)");
+  d->add_option("--alpha", a.alpha, "family-wise significance level (Holm), default 0.01");
+  d->add_flag("--quiet", a.quiet, "no progress lines on stderr");
+  return d;
+}
+
+namespace {
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw ki::InputError(path, 0, 0, "cannot open for writing");
+  out << text;
+  if (!out) throw ki::InputError(path, 0, 0, "write failed");
+}
+
+std::string um(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v << " um";
+  return s.str();
+}
+
+}  // namespace
+
+int run_diagnose(const DiagnoseArgs& a) {
+  const ki::Robot robot = ki::load_robot(a.robot);
+  ki::PoseTableOptions popt;
+  popt.joint_count = ki::Robot::joint_count();
+  popt.warn = [](const std::string& line) { std::cerr << line << "\n"; };
+  const ki::PoseTable data = ki::read_pose_table(a.data, popt);
+
+  ki::DiagnoseOptions opt;
+  if (a.noise_um) {
+    if (!(*a.noise_um > 0) || !std::isfinite(*a.noise_um)) throw ki::InputError("--noise-um must be a number > 0");
+    opt.noise_um = a.noise_um;
+  }
+  if (!(a.alpha > 0 && a.alpha < 1)) throw ki::InputError("--alpha must be in (0, 1)");
+  opt.alpha = a.alpha;
+  opt.progress = !a.quiet;
+  std::stringstream list(a.effects);
+  for (std::string name; std::getline(list, name, ',');) {
+    if (name.empty()) continue;
+    if (ki::find_effect(name) == nullptr)
+      throw ki::InputError("--effects: unknown effect '" + name + "' (known: " + ki::effect_names() + ")");
+    opt.candidates.push_back(name);
+  }
+
+  const ki::Diagnosis d = ki::diagnose(robot, data, opt);
+  write_text(a.json, ki::diagnosis_to_json(d));
+  if (!a.report.empty()) write_text(a.report, ki::diagnosis_report_html(d));
+
+  std::cout << "diagnose: " << a.data << ", robot " << robot.name << " (" << d.base_model << ")\n";
+  std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << "); base model RMS cal " << um(d.rms.cal)
+            << ", test " << um(d.rms.test) << "\n";
+  for (const ki::EffectTest& t : d.ranking) {
+    std::cout << "  " << (t.accepted ? "+ " : "  ") << t.effect;
+    if (!t.testable) {
+      std::cout << ": not testable, " << t.why_not << "\n";
+      continue;
+    }
+    std::cout << ": F = " << t.score << ", p(Holm) = " << t.p_adjusted << ", test RMS -> " << um(t.rms_after.test)
+              << ", confounded " << int(t.confounded * 100 + 0.5) << " %\n";
+  }
+  std::cout << "  verdict: " << d.verdict << "; final RMS cal " << um(d.final_rms.cal) << ", test "
+            << um(d.final_rms.test) << "\n";
+  for (const ki::Hotspot& h : d.hotspots) std::cout << "  hotspot (" << h.kind << "): " << h.where << " - " << h.detail << "\n";
+  for (const std::string& n : d.notes) std::cout << "  note: " << n << "\n";
+  return 0;
+}
+
+}  // namespace kincal_app

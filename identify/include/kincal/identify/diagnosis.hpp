@@ -1,0 +1,115 @@
+// Model-versus-measurement diagnosis (`kincal diagnose`, GUIDE "Command-line
+// contract"): fit the base model on the cal rows, compare residuals with the
+// noise overall / per layer / per role / per joint / against every covariate,
+// rank the candidate effects by an F test of what each adds beyond the fitted
+// model (columns orthogonalised against it, Holm's multiple-testing control)
+// and by the held-out gain, accept effects stepwise, and give a verdict with
+// hotspots. docs/diagnosis.md explains every number.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+struct DiagnoseOptions {
+  std::optional<double> noise_um;  // tracker uncertainty σ per coordinate (µm), if known
+  double alpha = 0.01;             // family-wise significance level (Holm)
+  double min_test_gain = 0.05;     // an effect must cut the held-out RMS by ≥ 5 % to be accepted
+  std::vector<std::string> candidates;  // empty: every registered effect
+  bool progress = false;                // progress lines on stderr
+};
+
+// RMS of the residual per measured coordinate (µm): gauge target coordinates
+// for the hybrid; position coordinates (and orientation × 200 mm) for 6-UPS.
+struct RoleRms {
+  double cal = 0, test = 0;
+  std::size_t cal_nodes = 0, test_nodes = 0;
+};
+
+struct EffectTest {
+  std::string effect;
+  bool testable = true;
+  std::string why_not;       // when not testable
+  int parameters = 0;
+  double score = 0;          // F statistic of the added columns (orthogonalised against the model)
+  double p_value = 1;        // raw
+  double p_adjusted = 1;     // Holm-adjusted
+  double confounded = 0;     // fraction (0–1) of the effect's column energy inside the model's span
+  RoleRms rms_after;         // model + this effect, refitted on cal
+  double test_gain = 0;      // 1 − rms_after.test / rms_before.test (0 if no test rows)
+  bool accepted = false;
+  int step = 0;              // stepwise step at which it was ranked (1-based)
+};
+
+struct DiagnosisStep {
+  std::vector<std::string> model;  // accepted effects so far ("base" first)
+  RoleRms rms;
+};
+
+// Residual grouped by something (a layer, a joint, a workspace region, a
+// covariate bin): the RMS there against the noise.
+struct ResidualGroup {
+  std::string label;      // "layer 2", "joint 3", "x>0,y<0", "q3 in [412, 431] mm", "temp"
+  std::size_t nodes = 0;
+  double rms_um = 0;
+  double ratio = 0;       // rms / noise
+};
+
+struct Hotspot {
+  std::string kind;       // "joint", "region", "covariate", "layer"
+  std::string where;      // e.g. "joint 3 for q3 in [412.0, 431.0] mm"
+  double share = 0;       // fraction of the excess residual energy there
+  std::string detail;
+};
+
+// Per-node data for the report's pictures (cal and test rows, final model).
+struct NodeResidual {
+  std::string id;
+  std::optional<long long> layer;
+  bool test = false;
+  Vec6<double> commanded = Vec6<double>::Zero();
+  Vec6<double> q = Vec6<double>::Zero();
+  std::optional<double> temperature, time;
+  Vec3<double> before = Vec3<double>::Zero();  // tool-point position residual of the base model, µm
+  Vec3<double> after = Vec3<double>::Zero();   // with the accepted effects, µm
+  Vec6<double> joint_before = Vec6<double>::Zero();  // implied joint-space residual, µm or µrad
+  Vec6<double> joint_after = Vec6<double>::Zero();
+};
+
+struct Diagnosis {
+  std::string robot, data_file, family;
+  double noise_um = 0;
+  std::string noise_source;  // "given", "repeated nodes", "estimated"
+  RoleRms rms;               // base model
+  std::vector<ResidualGroup> by_layer, by_joint, by_region, by_covariate;
+  std::vector<EffectTest> ranking;  // best first (first step's order), untestable at the end
+  std::vector<std::string> accepted;
+  std::vector<DiagnosisStep> steps;  // base, then after each accepted effect
+  std::string verdict;               // consistent | explained | unexplained
+  RoleRms final_rms;
+  std::vector<Hotspot> hotspots;
+  std::vector<std::string> notes;    // what could not be done and why (bad input that still allowed a report)
+  std::vector<NodeResidual> nodes;
+  std::string base_model;            // what the base model is (e.g. "seed 001 42-parameter model")
+  // Values of the accepted effects' parameters in the final fit, "scale:s1" → value.
+  std::vector<std::pair<std::string, double>> accepted_parameters;
+  double seconds = 0;
+};
+
+Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options = {});
+
+// DIAG.json (GUIDE contract keys first, then the details).
+std::string diagnosis_to_json(const Diagnosis& d);
+
+// One self-contained HTML file with inline SVG (identify/src/report.cpp).
+std::string diagnosis_report_html(const Diagnosis& d);
+
+}  // namespace kincal::identify

@@ -1,0 +1,92 @@
+// Physical effects, identification half (GUIDE "An effect is the unit of
+// physics"; the controller half and the definitions are in
+// core/include/kincal/core/effects.hpp). An Effect names its parameters, says
+// whether a data set carries the inputs it needs, gives its sensitivity
+// columns (tool twist per unit parameter at a node, in the robot's pose
+// frame), and stores identified values into core's EffectParameters. The five
+// candidates of the GUIDE are registered by default; a user effect is one
+// class and one register_effect() call (docs/effects.md walks through one).
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kincal/core/effects.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+// What the sensitivity columns of one node depend on.
+struct EffectNode {
+  Vec6<double> q = Vec6<double>::Zero();                 // joint commands sent
+  EffectInputs<double> inputs;                           // approach directions, static load
+  std::optional<double> temperature, time;               // °C, s
+  Mat6<double> joint_twist = Mat6<double>::Zero();       // tool twist per unit error of each joint
+  Pose<double> pose;                                     // commanded tool pose (pose frame)
+};
+
+class Effect {
+ public:
+  virtual ~Effect() = default;
+  virtual std::string name() const = 0;
+  virtual std::string description() const = 0;  // one line, for reports
+  // Parameter names without the effect prefix, e.g. {"s1", ..., "s6"}.
+  virtual std::vector<std::string> parameter_names(const Robot& robot) const = 0;
+  // "" when the data carries what the effect needs; else why it cannot be
+  // tested (e.g. "no temp column"), one phrase.
+  virtual std::string missing_inputs(const PoseTable& data) const = 0;
+  // Tool twist per unit parameter at one node: 6 × parameter_names().size().
+  virtual void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
+                             Eigen::Ref<Eigen::MatrixXd> columns) const = 0;
+  // Controller half: writes identified values (in parameter_names order) into
+  // core's parameter set; `values` adds to what is there.
+  virtual void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const = 0;
+};
+
+// The registered effects, the five GUIDE candidates first (scale, backlash,
+// compliance, thermal, cyclic).
+const std::vector<std::shared_ptr<const Effect>>& effect_registry();
+// Adds (or replaces, by name) an effect. Not thread-safe: call at start-up.
+void register_effect(std::shared_ptr<const Effect> effect);
+// nullptr if unknown.
+const Effect* find_effect(const std::string& name);
+// Known names, comma separated (for error messages).
+std::string effect_names();
+
+// Machine data of the corrections (core EffectParameters with all effect
+// values zero): screw lead and screw-driven joints, the weight direction and
+// the base origin in the pose frame.
+EffectParameters<double> effect_frame(const Robot& robot);
+
+// Per-row effect nodes for a table, in row order (rows whose nominal IK fails
+// get std::nullopt): q from q1..q6 or the nominal IK, directions from
+// dir1..dir6 or derived from the command sequence (sign of the change from
+// the previous row, kept when a joint does not move; the first row takes the
+// first change), the static load and joint_twist at the nominal configuration.
+std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const PoseTable& table);
+
+// Effect values from `--effect NAME:PARAM=VALUE` settings or a model: name →
+// values in parameter_names order. Throws InputError for an unknown effect or
+// parameter (naming the known ones).
+struct EffectValues {
+  std::map<std::string, Eigen::VectorXd> values;  // by effect name
+  bool empty() const { return values.empty(); }
+  void set(const Robot& robot, const std::string& effect, const std::string& parameter, double value);
+  EffectParameters<double> to_core(const Robot& robot) const;
+  // Whether any present effect needs the temperature input.
+  bool needs_temperature() const;
+};
+
+// The tool pose the machine with these effects reaches for commands q of a
+// node whose effect-free forward kinematics gives `reached_without`:
+// joint-space effects change q (the caller re-runs its FK with
+// q + effect_joint_error), thermal scales about the base origin. This returns
+// the joints to drive the FK with.
+Vec6<double> effect_actual_joints(const EffectParameters<double>& effects, const EffectNode& node);
+
+}  // namespace kincal::identify

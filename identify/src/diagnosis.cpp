@@ -1,0 +1,841 @@
+// Model-versus-measurement diagnosis (docs/diagnosis.md).
+//
+// Everything after the base fit is linear: the base model is fitted by its own
+// nonlinear pipeline (seed 001's iterated LS for a 6-UPS, seed 000's coarse +
+// fine stages for the hybrid), which leaves a residual r and the design H of
+// the base parameters at the solution. An effect adds columns G (its tool
+// twists through the measurement map); r is then refitted on [H G] — one
+// Gauss–Newton step from the base solution, exact to second order in the
+// small effect sizes. The nested-model F test on [H] vs [H G] is the test of
+// what G adds beyond the fitted model (equivalently G orthogonalised against
+// H); Holm's step-down procedure controls the family-wise error over the
+// candidates; the held-out (test) rows never enter a fit and give the gain.
+#include "kincal/identify/diagnosis.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <set>
+#include <nlohmann/json.hpp>
+
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/gauge.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/simulate.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// A 6-UPS measures orientation too; a rotation counts as the displacement it
+// causes 200 mm from its axis (as in stewart_calibration.cpp), so every
+// residual coordinate is in mm and one noise level applies to all.
+constexpr double kOrientationWeightMm = 200.0;
+constexpr double kMicro = 1000.0;  // mm → µm
+
+bool usable(const PoseRow& r) { return r.status.empty() || r.status == "ok"; }
+
+struct NodeData {
+  std::size_t row = 0;
+  bool test = false;
+  VectorXd r;  // base-model residual in measurement space, mm
+  MatrixXd M;  // measurement map: Δy = M·twist
+  MatrixXd H;  // base design rows at the solution
+  EffectNode effect;
+};
+
+struct BaseModel {
+  std::string description;
+  Index rows_per_node = 0;
+  Index parameters = 0;
+  std::vector<NodeData> nodes;
+};
+
+// ---- base models -------------------------------------------------------------
+
+BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
+  const StewartCalibration cal = calibrate_stewart(robot, data);
+  const StewartGeometry<double> g = stewart_with_errors(robot.stewart(), cal.theta);
+  BaseModel base;
+  base.description = "seed 001 42-parameter model (iterated LS, " + std::to_string(cal.history.size()) + " rounds)";
+  base.rows_per_node = 6;
+  base.parameters = kStewartParameterCount;
+  Vec6<double> w;
+  w << 1, 1, 1, kOrientationWeightMm, kOrientationWeightMm, kOrientationWeightMm;
+  for (std::size_t k = 0; k < data.rows.size(); ++k) {
+    const PoseRow& row = data.rows[k];
+    if (!row.measured || !usable(row) || !en[k]) continue;
+    const Pose<double> measured = Pose<double>::from_xyz_rpy(*row.measured);
+    Pose<double> predicted;
+    if (stewart_fk(g, en[k]->q, measured, predicted).status != Status::Ok) continue;
+    NodeData n;
+    n.row = k;
+    n.test = row.role == Role::Test;
+    n.r = w.asDiagonal() * pose_error(measured, predicted);
+    n.M = w.asDiagonal();
+    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted);
+    n.effect = *en[k];
+    base.nodes.push_back(std::move(n));
+  }
+  return base;
+}
+
+BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
+  HybridCalibrationOptions opt;
+  const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
+  // OLS, not Liu: the diagnosis refits the base columns anyway, and an
+  // unbiased fit leaves a residual orthogonal to them (the F tests assume it).
+  const HybridCompensation comp = cal.compensation(HybridFineEstimator::Ols);
+  const HybridGeometry<double>& g0 = robot.hybrid();
+  const HybridGeometry<double> gc = comp.controller_geometry();
+  const bool structural = comp.structural.size() > 0;
+  BaseModel base;
+  base.description = "seed 000 coarse + fine model (" + std::to_string(cal.kept.size()) + " identifiable of " +
+                     std::to_string(HybridErrorModel::kParameterCount) + " source errors)";
+  base.rows_per_node = 9;
+  base.parameters = Index(cal.kept.size());
+  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  for (std::size_t k = 0; k < data.rows.size(); ++k) {
+    const PoseRow& row = data.rows[k];
+    if (!row.targets || !usable(row) || !en[k]) continue;
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    HybridPassive<double> guess = g0.home;
+    Vec6<double> q_ik;
+    if (hybrid_ik(g0, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
+    Pose<double> predicted;
+    if (hybrid_fk(gc, en[k]->q, guess, predicted).status != Status::Ok) continue;
+    if (comp.model->error_jacobian(commanded, B) != Status::Ok) continue;
+    if (structural) predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
+    const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
+    NodeData n;
+    n.row = k;
+    n.test = row.role == Role::Test;
+    n.r.resize(9);
+    for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
+    n.M = gauge_map(g0, robot.gauge_radius, predicted);
+    n.H.resize(9, base.parameters);
+    for (Index j = 0; j < base.parameters; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
+    n.effect = *en[k];
+    base.nodes.push_back(std::move(n));
+  }
+  return base;
+}
+
+// ---- linear algebra ----------------------------------------------------------
+
+// Least squares by a rank-revealing complete orthogonal decomposition of the
+// column-scaled design (columns in mm and rad, or per unit of an effect input,
+// differ by orders of magnitude; never the normal equations).
+class LeastSquares {
+ public:
+  explicit LeastSquares(const MatrixXd& X) : scale_(X.cols()) {
+    for (Index j = 0; j < X.cols(); ++j) {
+      const double n = X.col(j).norm();
+      scale_(j) = n > 0 ? n : 1.0;
+    }
+    cod_.setThreshold(1e-10);
+    cod_.compute(X * scale_.cwiseInverse().asDiagonal());
+  }
+  VectorXd solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
+  Index rank() const { return cod_.rank(); }
+
+ private:
+  VectorXd scale_;
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod_;
+};
+
+double rms_of(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm() / double(v.size())) : 0.0; }
+
+// Stacked problem of one role.
+struct Stack {
+  MatrixXd H;
+  VectorXd y;
+  std::vector<std::size_t> node;  // index into BaseModel::nodes per block
+  std::map<std::string, MatrixXd> G;  // effect columns
+};
+
+struct FitResult {
+  VectorXd coef;
+  VectorXd r_cal, r_test;
+  double rss = 0;
+  Index rank = 0;
+  RoleRms rms;
+};
+
+MatrixXd design(const Stack& s, const std::vector<std::string>& effects) {
+  Index cols = s.H.cols();
+  for (const std::string& e : effects) cols += s.G.at(e).cols();
+  MatrixXd X(s.H.rows(), cols);
+  X.leftCols(s.H.cols()) = s.H;
+  Index c = s.H.cols();
+  for (const std::string& e : effects) {
+    X.middleCols(c, s.G.at(e).cols()) = s.G.at(e);
+    c += s.G.at(e).cols();
+  }
+  return X;
+}
+
+FitResult fit(const Stack& cal, const Stack& test, const std::vector<std::string>& effects) {
+  FitResult f;
+  const MatrixXd Xc = design(cal, effects);
+  const LeastSquares ls(Xc);
+  f.coef = ls.solve(cal.y);
+  f.rank = ls.rank();
+  f.r_cal = cal.y - Xc * f.coef;
+  f.rss = f.r_cal.squaredNorm();
+  f.rms.cal = rms_of(f.r_cal) * kMicro;
+  f.rms.cal_nodes = cal.node.size();
+  if (test.y.size() > 0) {
+    f.r_test = test.y - design(test, effects) * f.coef;
+    f.rms.test = rms_of(f.r_test) * kMicro;
+    f.rms.test_nodes = test.node.size();
+  }
+  return f;
+}
+
+// Upper tail of χ²_ν / ν as F(ν, ∞) (the F routine's incomplete beta).
+double chi2_upper_tail(double chi2, double dof) {
+  return dof > 0 ? f_distribution_upper_tail(chi2 / dof, dof, 1e8) : 1.0;
+}
+
+// ---- noise ---------------------------------------------------------------------
+
+// Pooled within-group variance of repeated nodes (same commanded pose).
+std::optional<double> repeated_node_noise(const PoseTable& data, const BaseModel& base) {
+  std::map<std::vector<double>, std::vector<const NodeData*>> groups;
+  for (const NodeData& n : base.nodes) {
+    const Vec6<double>& c = data.rows[n.row].commanded;
+    groups[std::vector<double>(c.data(), c.data() + 6)].push_back(&n);
+  }
+  double ss = 0, dof = 0;
+  for (const auto& [pose, members] : groups) {
+    if (members.size() < 2) continue;
+    // Residuals of one commanded pose differ only by noise (same model prediction).
+    VectorXd mean = VectorXd::Zero(members.front()->r.size());
+    for (const NodeData* m : members) mean += m->r;
+    mean /= double(members.size());
+    for (const NodeData* m : members) ss += (m->r - mean).squaredNorm();
+    dof += double((members.size() - 1) * std::size_t(mean.size()));
+  }
+  if (dof < 10) return std::nullopt;
+  return std::sqrt(ss / dof);
+}
+
+// ---- per-node pictures: tool-point and joint residuals ---------------------------
+
+struct NodeTwist {
+  Twist<double> twist;
+  Vec6<double> joint;          // implied joint error J⁻¹·twist (mm or rad)
+  Vec6<double> joint_noise_sd;  // its standard deviation from measurement noise of σ = 1
+};
+
+NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
+  NodeTwist out;
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(n.M);
+  out.twist = qr.solve(r);
+  const Eigen::PartialPivLU<Mat6<double>> J(n.effect.joint_twist);
+  out.joint = J.solve(out.twist);
+  // Cov(twist) = (MᵀM)⁻¹ for unit noise; Cov(joint) = J⁻¹ (MᵀM)⁻¹ J⁻ᵀ.
+  const Mat6<double> MtM = (n.M.transpose() * n.M);
+  const Mat6<double> Jinv = J.inverse();
+  const Mat6<double> cov = Jinv * MtM.inverse() * Jinv.transpose();
+  out.joint_noise_sd = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return out;
+}
+
+std::string fmt(double v, int digits = 3) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
+  return b;
+}
+
+std::string joint_unit(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? "rad" : "mm"; }
+double joint_display(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? 1e6 : 1e3; }  // µrad / µm
+std::string joint_display_unit(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? "urad" : "um"; }
+
+}  // namespace
+
+// ---- diagnose --------------------------------------------------------------------
+
+Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto progress = [&](const std::string& s) {
+    if (options.progress) std::cerr << "diagnose: " << s << "\n";
+  };
+  Diagnosis d;
+  d.robot = robot.name;
+  d.data_file = data.file;
+  d.family = robot.family();
+  if (robot.is_stewart() && !data.has_measured)
+    throw InputError(data.file, 1, 0, "needs the measured pose columns mx,my,mz,mrx,mry,mrz to diagnose a 6-UPS");
+  if (robot.is_hybrid() && !data.has_targets)
+    throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
+  if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
+  if (data.has_layer) {
+    std::set<long long> layers;
+    for (const PoseRow& r : data.rows)
+      if (r.layer) layers.insert(*r.layer);
+    if (layers.size() == 1)
+      d.notes.push_back("a single layer (" + std::to_string(*layers.begin()) +
+                        "): parameters that act along the layer normal are poorly determined; measure a second layer");
+  }
+
+  progress("fitting the base model on the cal rows");
+  const std::vector<std::optional<EffectNode>> en = effect_nodes(robot, data);
+  BaseModel base;
+  base = robot.is_stewart() ? stewart_base(robot, data, en) : hybrid_base(robot, data, en);
+  d.base_model = base.description;
+
+  // Stacks per role.
+  Stack cal, test;
+  {
+    Index nc = 0, nt = 0;
+    for (const NodeData& n : base.nodes) (n.test ? nt : nc) += n.r.size();
+    cal.H.resize(nc, base.parameters), cal.y.resize(nc);
+    test.H.resize(nt, base.parameters), test.y.resize(nt);
+    Index rc = 0, rt = 0;
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+      const NodeData& n = base.nodes[k];
+      Stack& s = n.test ? test : cal;
+      Index& r = n.test ? rt : rc;
+      s.H.middleRows(r, n.r.size()) = n.H;
+      s.y.segment(r, n.r.size()) = n.r;
+      s.node.push_back(k);
+      r += n.r.size();
+    }
+  }
+  if (test.node.empty())
+    d.notes.push_back("no test rows: effects are accepted on significance alone (no held-out check)");
+
+  // Candidate effects and their columns.
+  const EffectParameters<double> frame = effect_frame(robot);
+  std::vector<const Effect*> candidates;
+  for (const auto& e : effect_registry()) {
+    if (!options.candidates.empty() &&
+        std::find(options.candidates.begin(), options.candidates.end(), e->name()) == options.candidates.end())
+      continue;
+    EffectTest t;
+    t.effect = e->name();
+    t.why_not = e->missing_inputs(data);
+    t.parameters = int(e->parameter_names(robot).size());
+    if (!t.why_not.empty()) {
+      t.testable = false;
+      d.ranking.push_back(t);
+      continue;
+    }
+    candidates.push_back(e.get());
+    for (Stack* s : {&cal, &test}) {
+      MatrixXd G(s->y.size(), t.parameters);
+      MatrixXd twist(6, t.parameters);
+      Index r = 0;
+      for (std::size_t k : s->node) {
+        const NodeData& n = base.nodes[k];
+        e->twist_columns(robot, frame, n.effect, twist);
+        G.middleRows(r, n.r.size()) = n.M * twist;
+        r += n.r.size();
+      }
+      s->G[e->name()] = G;
+    }
+  }
+  const Index n_cal = cal.y.size();
+  if (n_cal <= base.parameters)
+    throw InputError(data.file, 0, 0,
+                     "only " + std::to_string(cal.node.size()) + " usable cal nodes (" + std::to_string(n_cal) +
+                         " equations) for " + std::to_string(base.parameters) + " base parameters");
+
+  // Noise.
+  const FitResult base_fit = fit(cal, test, {});
+  d.rms = base_fit.rms;
+  if (options.noise_um) {
+    d.noise_um = *options.noise_um;
+    d.noise_source = "given";
+  } else if (const auto rep = repeated_node_noise(data, base)) {
+    d.noise_um = *rep * kMicro;
+    d.noise_source = "repeated nodes";
+  } else {
+    d.noise_source = "estimated";  // set after the stepwise search, from the final cal residual
+  }
+  const bool noise_known = d.noise_source != "estimated";
+  const double sigma_mm = d.noise_um / kMicro;
+
+  auto consistent = [&](const FitResult& f) {
+    if (!noise_known || !(sigma_mm > 0)) return false;
+    const double dof = double(n_cal - f.rank);
+    if (chi2_upper_tail(f.rss / (sigma_mm * sigma_mm), dof) < options.alpha) return false;
+    if (f.r_test.size() > 0) {
+      // Held-out rows also carry the spread of the estimate (leverage): allow
+      // ~(1 + p/n) on the variance plus a 3σ band of χ²/ν.
+      const double nt = double(f.r_test.size());
+      const double expected = sigma_mm * sigma_mm * (1.0 + double(f.rank) / double(n_cal));
+      if (f.r_test.squaredNorm() / nt > expected * (1.0 + 3.0 * std::sqrt(2.0 / nt))) return false;
+    }
+    return true;
+  };
+
+  // Stepwise search.
+  std::vector<std::string> accepted;
+  FitResult current = base_fit;
+  d.steps.push_back({{"base"}, base_fit.rms});
+  std::map<std::string, EffectTest> latest;
+  for (int step = 1; step <= int(candidates.size()); ++step) {
+    if (consistent(current)) break;
+    progress("step " + std::to_string(step) + ": testing " + std::to_string(candidates.size() - accepted.size()) +
+             " candidate effects");
+    std::vector<EffectTest> tests;
+    for (const Effect* e : candidates) {
+      if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
+      EffectTest t;
+      t.effect = e->name();
+      t.parameters = int(cal.G.at(e->name()).cols());
+      t.step = step;
+      std::vector<std::string> with = accepted;
+      with.push_back(e->name());
+      const FitResult f = fit(cal, test, with);
+      const double df1 = double(f.rank - current.rank), df2 = double(n_cal - f.rank);
+      if (df1 > 0 && df2 > 0 && f.rss > 0) {
+        t.score = ((current.rss - f.rss) / df1) / (f.rss / df2);
+        t.p_value = f_distribution_upper_tail(t.score, df1, df2);
+      }
+      // Share of the effect's columns inside the span of the current model.
+      {
+        const MatrixXd X = design(cal, accepted);
+        const LeastSquares ls(X);
+        const MatrixXd& G = cal.G.at(e->name());
+        double sum = 0;
+        int counted = 0;
+        for (Index j = 0; j < G.cols(); ++j) {
+          const double g2 = G.col(j).squaredNorm();
+          if (!(g2 > 0)) continue;
+          const VectorXd inside = X * ls.solve(G.col(j));
+          sum += std::min(1.0, inside.squaredNorm() / g2);
+          ++counted;
+        }
+        t.confounded = counted > 0 ? sum / counted : 1.0;
+      }
+      t.rms_after = f.rms;
+      if (current.rms.test > 0 && f.r_test.size() > 0) t.test_gain = 1.0 - f.rms.test / current.rms.test;
+      tests.push_back(t);
+    }
+    // Holm's step-down adjustment over this step's candidates.
+    std::vector<std::size_t> order(tests.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
+    double running = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const double adj = std::min(1.0, double(order.size() - i) * tests[order[i]].p_value);
+      running = std::max(running, adj);
+      tests[order[i]].p_adjusted = running;
+    }
+    const EffectTest* best = nullptr;
+    for (const EffectTest& t : tests) {
+      const bool significant = t.p_adjusted < options.alpha;
+      const bool helps = test.node.empty() || t.test_gain >= options.min_test_gain;
+      if (significant && helps && (best == nullptr || t.score > best->score)) best = &t;
+    }
+    for (const EffectTest& t : tests) latest[t.effect] = t;
+    if (best == nullptr) break;
+    latest[best->effect].accepted = true;
+    accepted.push_back(best->effect);
+    current = fit(cal, test, accepted);
+    std::vector<std::string> model = {"base"};
+    model.insert(model.end(), accepted.begin(), accepted.end());
+    d.steps.push_back({model, current.rms});
+    progress("accepted " + best->effect + " (F = " + fmt(best->score) + ", held-out RMS " + fmt(current.rms.test) +
+             " um)");
+  }
+  d.accepted = accepted;
+  d.final_rms = current.rms;
+  if (!noise_known) {
+    const double dof = double(n_cal - current.rank);
+    d.noise_um = dof > 0 ? std::sqrt(current.rss / dof) * kMicro : 0.0;
+    d.notes.push_back(
+        "noise estimated from the final model's cal residual (no --noise-um, no repeated nodes): a systematic residual "
+        "the candidates do not explain would be counted as noise; give the tracker uncertainty for a verdict");
+  }
+
+  // Ranking: accepted in order, then by score; untestable last.
+  {
+    std::vector<EffectTest> ranked;
+    for (const std::string& a : accepted) ranked.push_back(latest[a]);
+    std::vector<EffectTest> rest;
+    for (const auto& [name, t] : latest)
+      if (!t.accepted) rest.push_back(t);
+    std::sort(rest.begin(), rest.end(), [](const EffectTest& a, const EffectTest& b) { return a.score > b.score; });
+    ranked.insert(ranked.end(), rest.begin(), rest.end());
+    for (const EffectTest& t : d.ranking) ranked.push_back(t);  // the untestable ones
+    d.ranking = ranked;
+  }
+
+  // Accepted effect values from the final fit.
+  {
+    Index c = base.parameters;
+    for (const std::string& a : accepted) {
+      const std::vector<std::string> names = find_effect(a)->parameter_names(robot);
+      for (std::size_t j = 0; j < names.size(); ++j)
+        d.accepted_parameters.emplace_back(a + ":" + names[j], current.coef(c + Index(j)));
+      c += Index(names.size());
+    }
+  }
+
+  // Verdict.
+  const bool final_consistent = noise_known ? consistent(current) : true;
+  if (noise_known) {
+    if (accepted.empty() && final_consistent)
+      d.verdict = "consistent";
+    else if (final_consistent)
+      d.verdict = "explained";
+    else
+      d.verdict = "unexplained";
+  } else {
+    d.verdict = accepted.empty() ? "consistent" : "explained";
+  }
+
+  // Per-node residuals (before: base model; after: the final model).
+  progress("locating the residual");
+  std::vector<NodeTwist> before(base.nodes.size()), after(base.nodes.size());
+  {
+    VectorXd r_after_cal = current.r_cal, r_after_test = current.r_test, r_before_cal = base_fit.r_cal,
+             r_before_test = base_fit.r_test;
+    Index rc = 0, rt = 0;
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+      const NodeData& n = base.nodes[k];
+      const Index len = n.r.size();
+      Index& r = n.test ? rt : rc;
+      const VectorXd& b = n.test ? r_before_test : r_before_cal;
+      const VectorXd& a = n.test ? r_after_test : r_after_cal;
+      before[k] = node_twist(n, b.segment(r, len));
+      after[k] = node_twist(n, a.segment(r, len));
+      r += len;
+      const PoseRow& row = data.rows[n.row];
+      NodeResidual nr;
+      nr.id = row.id;
+      nr.layer = row.layer;
+      nr.test = n.test;
+      nr.commanded = row.commanded;
+      nr.q = n.effect.q;
+      nr.temperature = row.temp;
+      nr.time = row.time;
+      nr.before = before[k].twist.head<3>() * kMicro;
+      nr.after = after[k].twist.head<3>() * kMicro;
+      for (int j = 0; j < 6; ++j) {
+        nr.joint_before(j) = before[k].joint(j) * joint_display(robot, j);
+        nr.joint_after(j) = after[k].joint(j) * joint_display(robot, j);
+      }
+      d.nodes.push_back(nr);
+    }
+  }
+
+  // Groups: per layer, per joint, per region, per covariate (final residual).
+  std::vector<double> node_ss(base.nodes.size(), 0.0);
+  std::vector<Index> node_len(base.nodes.size(), 0);
+  {
+    Index rc = 0, rt = 0;
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+      const NodeData& n = base.nodes[k];
+      const Index len = n.r.size();
+      Index& r = n.test ? rt : rc;
+      const VectorXd& a = n.test ? current.r_test : current.r_cal;
+      node_ss[k] = a.segment(r, len).squaredNorm();
+      node_len[k] = len;
+      r += len;
+    }
+  }
+  const double sigma_used = d.noise_um / kMicro;
+  double excess_total = 0;
+  for (std::size_t k = 0; k < base.nodes.size(); ++k)
+    excess_total += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
+  auto group = [&](const std::string& label, const std::vector<std::size_t>& members, double* excess = nullptr) {
+    ResidualGroup g;
+    g.label = label;
+    g.nodes = members.size();
+    double ss = 0, len = 0, ex = 0;
+    for (std::size_t k : members) {
+      ss += node_ss[k];
+      len += double(node_len[k]);
+      ex += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
+    }
+    g.rms_um = len > 0 ? std::sqrt(ss / len) * kMicro : 0.0;
+    g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
+    if (excess != nullptr) *excess = excess_total > 0 ? ex / excess_total : 0.0;
+    return g;
+  };
+  {
+    std::map<long long, std::vector<std::size_t>> layers;
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) layers[data.rows[base.nodes[k].row].layer.value_or(0)].push_back(k);
+    for (const auto& [layer, members] : layers) {
+      double share = 0;
+      d.by_layer.push_back(group("layer " + std::to_string(layer), members, &share));
+      if (d.verdict == "unexplained" && layers.size() > 1 && share > 1.5 / double(layers.size()))
+        d.hotspots.push_back({"layer", "layer " + std::to_string(layer), share,
+                              "RMS " + fmt(d.by_layer.back().rms_um) + " um = " + fmt(d.by_layer.back().ratio) +
+                                  " x noise"});
+    }
+  }
+  // Regions: quadrants of the commanded x, y (and the upper/lower half in z).
+  {
+    std::map<std::string, std::vector<std::size_t>> regions;
+    double zmid = 0;
+    for (const NodeData& n : base.nodes) zmid += data.rows[n.row].commanded(2);
+    zmid /= double(std::max<std::size_t>(1, base.nodes.size()));
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+      const Vec6<double>& c = data.rows[base.nodes[k].row].commanded;
+      const std::string label = std::string(c(0) >= 0 ? "x>=0" : "x<0") + "," + (c(1) >= 0 ? "y>=0" : "y<0") + "," +
+                                (c(2) >= zmid ? "upper z" : "lower z");
+      regions[label].push_back(k);
+    }
+    const ResidualGroup* worst = nullptr;
+    double worst_share = 0;
+    for (const auto& [label, members] : regions) {
+      double share = 0;
+      d.by_region.push_back(group(label, members, &share));
+      if (share > worst_share) worst_share = share, worst = &d.by_region.back();
+    }
+    if (d.verdict == "unexplained" && worst != nullptr && worst_share > 2.0 / double(regions.size()))
+      d.hotspots.push_back({"region", worst->label, worst_share,
+                            "RMS " + fmt(worst->rms_um) + " um = " + fmt(worst->ratio) + " x noise there"});
+  }
+  // Joints: the implied joint-space residual, standardised by its noise, in
+  // bins of the joint's own position (a local error in part of a stroke).
+  {
+    struct JointFinding {
+      int joint = 0;
+      double chi2 = 0, dof = 0, p = 1;
+      double lo = 0, hi = 0, peak = 0;
+    };
+    std::vector<JointFinding> findings;
+    for (int j = 0; j < 6; ++j) {
+      std::vector<std::size_t> idx(base.nodes.size());
+      std::iota(idx.begin(), idx.end(), 0);
+      double ss = 0, noise_ss = 0;
+      for (std::size_t k : idx) {
+        ss += after[k].joint(j) * after[k].joint(j);
+        noise_ss += after[k].joint_noise_sd(j) * after[k].joint_noise_sd(j);
+      }
+      ResidualGroup g;
+      g.label = "joint " + std::to_string(j + 1) + " (" + joint_unit(robot, j) + ")";
+      g.nodes = idx.size();
+      const double n = double(std::max<std::size_t>(1, idx.size()));
+      g.rms_um = std::sqrt(ss / n) * joint_display(robot, j);
+      const double noise_rms = std::sqrt(noise_ss / n) * sigma_used;
+      g.ratio = noise_rms > 0 ? std::sqrt(ss / n) / noise_rms : 0.0;
+      g.label += ", " + joint_display_unit(robot, j);
+      d.by_joint.push_back(g);
+      // Bins of q_j: mean standardised residual per bin; χ² = Σ n_b·z̄_b².
+      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+        return base.nodes[a].effect.q(j) < base.nodes[b].effect.q(j);
+      });
+      const std::size_t bins = std::max<std::size_t>(2, std::min<std::size_t>(10, idx.size() / 8));
+      JointFinding f;
+      f.joint = j;
+      double best_z = 0;
+      std::vector<double> bin_z(bins, 0.0);
+      std::vector<std::pair<double, double>> bin_range(bins);
+      for (std::size_t b = 0; b < bins; ++b) {
+        const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
+        if (to <= from || !(sigma_used > 0)) continue;
+        double zsum = 0;
+        for (std::size_t i = from; i < to; ++i) {
+          const std::size_t k = idx[i];
+          zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_used);
+        }
+        const double nb = double(to - from);
+        const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
+        f.chi2 += z * z;
+        f.dof += 1;
+        bin_z[b] = z;
+        bin_range[b] = {base.nodes[idx[from]].effect.q(j), base.nodes[idx[to - 1]].effect.q(j)};
+        if (std::abs(z) > std::abs(best_z)) best_z = z;
+      }
+      f.p = chi2_upper_tail(f.chi2, f.dof);
+      // The stretch of the stroke where the residual sits: the strongest bin
+      // and its neighbours of the same sign above 2σ.
+      std::size_t peak = 0;
+      for (std::size_t b = 0; b < bins; ++b)
+        if (std::abs(bin_z[b]) > std::abs(bin_z[peak])) peak = b;
+      std::size_t lo = peak, hi = peak;
+      while (lo > 0 && std::abs(bin_z[lo - 1]) > 2.0 && bin_z[lo - 1] * bin_z[peak] > 0) --lo;
+      while (hi + 1 < bins && std::abs(bin_z[hi + 1]) > 2.0 && bin_z[hi + 1] * bin_z[peak] > 0) ++hi;
+      f.lo = bin_range[lo].first;
+      f.hi = bin_range[hi].second;
+      f.peak = best_z;
+      findings.push_back(f);
+    }
+    std::sort(findings.begin(), findings.end(), [](const JointFinding& a, const JointFinding& b) {
+      return a.chi2 / std::max(1.0, a.dof) > b.chi2 / std::max(1.0, b.dof);
+    });
+    if (d.verdict == "unexplained" && !findings.empty() && findings.front().p < options.alpha) {
+      const JointFinding& f = findings.front();
+      const std::string unit = joint_unit(robot, f.joint);
+      d.hotspots.insert(d.hotspots.begin(),
+                        {"joint", "joint " + std::to_string(f.joint + 1) + " for q" + std::to_string(f.joint + 1) +
+                                      " in [" + fmt(f.lo, 6) + ", " + fmt(f.hi, 6) + "] " + unit,
+                         0.0,
+                         "the implied joint-" + std::to_string(f.joint + 1) +
+                             " residual varies along its stroke (chi2 = " + fmt(f.chi2) + " on " + fmt(f.dof) +
+                             " bins, p = " + fmt(f.p) + "; strongest bin " + fmt(f.peak) + " sigma)"});
+    }
+  }
+  // Covariates: the part of the residual that follows each covariate linearly.
+  {
+    struct Covariate {
+      std::string name;
+      std::vector<double> value;
+    };
+    std::vector<Covariate> covs;
+    const char* pose_names[3] = {"x", "y", "z"};
+    for (int a = 0; a < 3; ++a) {
+      Covariate c{pose_names[a], {}};
+      for (const NodeData& n : base.nodes) c.value.push_back(data.rows[n.row].commanded(a));
+      covs.push_back(c);
+    }
+    for (int j = 0; j < 6; ++j) {
+      Covariate c{"q" + std::to_string(j + 1), {}};
+      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.q(j));
+      covs.push_back(c);
+      Covariate dir{"dir" + std::to_string(j + 1), {}};
+      for (const NodeData& n : base.nodes) dir.value.push_back(n.effect.inputs.direction(j));
+      covs.push_back(dir);
+    }
+    if (data.has_temp) {
+      Covariate c{"temp", {}};
+      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.temperature.value_or(0));
+      covs.push_back(c);
+    }
+    if (data.has_time) {
+      Covariate c{"time", {}};
+      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.time.value_or(0));
+      covs.push_back(c);
+    }
+    double best_p = 1;
+    std::string best_name;
+    ResidualGroup best_group;
+    for (const Covariate& c : covs) {
+      const double mean = std::accumulate(c.value.begin(), c.value.end(), 0.0) / double(std::max<std::size_t>(1, c.value.size()));
+      double sxx = 0;
+      for (double v : c.value) sxx += (v - mean) * (v - mean);
+      ResidualGroup g;
+      g.label = c.name;
+      g.nodes = c.value.size();
+      if (!(sxx > 1e-12 * (1 + mean * mean) * double(c.value.size()))) {
+        g.label += " (constant)";
+        d.by_covariate.push_back(g);
+        continue;
+      }
+      // Slope of each tool-point coordinate of the residual against c.
+      Vec3<double> sxy = Vec3<double>::Zero();
+      for (std::size_t k = 0; k < base.nodes.size(); ++k) sxy += (c.value[k] - mean) * after[k].twist.head<3>();
+      const Vec3<double> slope = sxy / sxx;
+      const double explained_ss = slope.squaredNorm() * sxx;  // mm², over the nodes
+      g.rms_um = std::sqrt(explained_ss / double(c.value.size())) * kMicro;
+      g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
+      d.by_covariate.push_back(g);
+      if (sigma_used > 0) {
+        // Under noise the tool-point residual's coordinates have σ of order
+        // σ·√(3/rows) per node (LS through M); the slope χ² uses that.
+        double tp_var = 0;
+        for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+          const MatrixXd MtM = base.nodes[k].M.transpose() * base.nodes[k].M;
+          tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
+        }
+        tp_var = tp_var / double(base.nodes.size()) * sigma_used * sigma_used;
+        const double chi2 = explained_ss / tp_var;
+        const double p = chi2_upper_tail(chi2, 3.0);
+        if (p < best_p) best_p = p, best_name = c.name, best_group = g;
+      }
+    }
+    if (d.verdict == "unexplained" && best_p < options.alpha / double(covs.size()))
+      d.hotspots.push_back({"covariate", best_name, 0.0,
+                            "the residual follows " + best_name + " linearly (" + fmt(best_group.rms_um) +
+                                " um RMS, p = " + fmt(best_p) + ")"});
+  }
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return d;
+}
+
+// ---- DIAG.json -------------------------------------------------------------------
+
+namespace {
+
+nlohmann::ordered_json rms_json(const RoleRms& r) {
+  nlohmann::ordered_json j;
+  j["cal"] = r.cal;
+  j["test"] = r.test;
+  return j;
+}
+
+nlohmann::ordered_json groups_json(const std::vector<ResidualGroup>& groups) {
+  nlohmann::ordered_json a = nlohmann::ordered_json::array();
+  for (const ResidualGroup& g : groups)
+    a.push_back({{"label", g.label}, {"nodes", g.nodes}, {"rms_um", g.rms_um}, {"ratio_to_noise", g.ratio}});
+  return a;
+}
+
+}  // namespace
+
+std::string diagnosis_to_json(const Diagnosis& d) {
+  nlohmann::ordered_json j;
+  j["noise_um"] = d.noise_um;
+  j["rms_um"] = rms_json(d.rms);
+  nlohmann::ordered_json ranking = nlohmann::ordered_json::array();
+  for (const EffectTest& t : d.ranking) {
+    nlohmann::ordered_json e;
+    e["effect"] = t.effect;
+    e["testable"] = t.testable;
+    if (!t.testable) {
+      e["why_not"] = t.why_not;
+    } else {
+      e["score"] = t.score;
+      e["p_value"] = t.p_value;
+      e["p_adjusted"] = t.p_adjusted;
+      e["parameters"] = t.parameters;
+      e["confounded"] = t.confounded;
+      e["rms_after_um"] = rms_json(t.rms_after);
+      e["test_gain"] = t.test_gain;
+      e["step"] = t.step;
+    }
+    e["accepted"] = t.accepted;
+    ranking.push_back(e);
+  }
+  j["ranking"] = ranking;
+  j["accepted"] = d.accepted;
+  j["verdict"] = d.verdict;
+  j["final_rms_um"] = rms_json(d.final_rms);
+  nlohmann::ordered_json hot = nlohmann::ordered_json::array();
+  for (const Hotspot& h : d.hotspots)
+    hot.push_back({{"kind", h.kind}, {"where", h.where}, {"share", h.share}, {"detail", h.detail}});
+  j["hotspots"] = hot;
+  j["noise_source"] = d.noise_source;
+  j["robot"] = d.robot;
+  j["data"] = d.data_file;
+  j["base_model"] = d.base_model;
+  j["nodes"] = {{"cal", d.rms.cal_nodes}, {"test", d.rms.test_nodes}};
+  nlohmann::ordered_json params = nlohmann::ordered_json::object();
+  for (const auto& [name, value] : d.accepted_parameters) params[name] = value;
+  j["accepted_parameters"] = params;
+  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
+  for (const DiagnosisStep& s : d.steps) steps.push_back({{"model", s.model}, {"rms_um", rms_json(s.rms)}});
+  j["steps"] = steps;
+  j["by_layer"] = groups_json(d.by_layer);
+  j["by_joint"] = groups_json(d.by_joint);
+  j["by_region"] = groups_json(d.by_region);
+  j["by_covariate"] = groups_json(d.by_covariate);
+  j["notes"] = d.notes;
+  j["seconds"] = d.seconds;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace kincal::identify

@@ -1,0 +1,298 @@
+#include "kincal/identify/effects.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kincal/identify/input_error.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+std::vector<std::string> numbered(const std::string& prefix, int count) {
+  std::vector<std::string> out;
+  for (int i = 1; i <= count; ++i) out.push_back(prefix + std::to_string(i));
+  return out;
+}
+
+// Joints a screw drives: the six legs of a 6-UPS, the three UPS limbs of the
+// hybrid (its wrist joints are revolute; a screw lead means nothing there).
+int screw_joint_count(const Robot& robot) { return robot.is_stewart() ? 6 : 3; }
+
+// The joint-space effects share one shape: the tool twist of joint i's error
+// times a per-node basis value; Δq_i = θ_i · basis_i (core/effects.hpp).
+class JointEffect : public Effect {
+ public:
+  void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
+                     Eigen::Ref<Eigen::MatrixXd> columns) const override {
+    const int n = int(parameter_names(robot).size());
+    for (int k = 0; k < n; ++k) {
+      const int joint = joint_of(robot, k);
+      columns.col(k) = node.joint_twist.col(joint) * basis(frame, node, k, joint);
+    }
+  }
+  void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const override {
+    for (int k = 0; k < int(values.size()); ++k) store(out, k, joint_of(robot, k), values(k));
+  }
+
+ protected:
+  virtual int joint_of(const Robot& /*robot*/, int k) const { return k; }
+  virtual double basis(const EffectParameters<double>& frame, const EffectNode& node, int k, int joint) const = 0;
+  virtual void store(EffectParameters<double>& out, int k, int joint, double value) const = 0;
+};
+
+class ScaleEffect final : public JointEffect {
+ public:
+  std::string name() const override { return "scale"; }
+  std::string description() const override { return "encoder / leadscrew scale error per actuated joint, dq_i = s_i q_i"; }
+  std::vector<std::string> parameter_names(const Robot&) const override { return numbered("s", 6); }
+  std::string missing_inputs(const PoseTable&) const override { return {}; }
+
+ protected:
+  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
+    return node.q(joint);
+  }
+  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.scale(joint) += v; }
+};
+
+class BacklashEffect final : public JointEffect {
+ public:
+  std::string name() const override { return "backlash"; }
+  std::string description() const override {
+    return "lost motion per actuated joint, dq_i = b_i dir_i (approach direction)";
+  }
+  std::vector<std::string> parameter_names(const Robot&) const override { return numbered("b", 6); }
+  std::string missing_inputs(const PoseTable& data) const override {
+    // Without dir columns the directions come from the command sequence
+    // (effect_nodes), which needs at least two rows.
+    if (!data.has_dir && data.rows.size() < 2) return "no dir1..dir6 columns and too few rows to derive directions";
+    return {};
+  }
+
+ protected:
+  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
+    return node.inputs.direction(joint);
+  }
+  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.backlash(joint) += v; }
+};
+
+class ComplianceEffect final : public JointEffect {
+ public:
+  std::string name() const override { return "compliance"; }
+  std::string description() const override {
+    return "axial deflection per actuator proportional to its static load from a payload weight (-z of the base)";
+  }
+  std::vector<std::string> parameter_names(const Robot&) const override { return numbered("k", 6); }
+  std::string missing_inputs(const PoseTable&) const override { return {}; }
+
+ protected:
+  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
+    return node.inputs.load(joint);
+  }
+  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.compliance(joint) += v; }
+};
+
+class CyclicEffect final : public JointEffect {
+ public:
+  std::string name() const override { return "cyclic"; }
+  std::string description() const override {
+    return "periodic screw error a_i sin(2 pi q_i / p) + b_i cos(2 pi q_i / p), p = screw lead";
+  }
+  std::vector<std::string> parameter_names(const Robot& robot) const override {
+    std::vector<std::string> out = numbered("a", screw_joint_count(robot));
+    for (const std::string& b : numbered("b", screw_joint_count(robot))) out.push_back(b);
+    return out;
+  }
+  std::string missing_inputs(const PoseTable&) const override { return {}; }
+
+ protected:
+  int joint_of(const Robot& robot, int k) const override { return k % screw_joint_count(robot); }
+  double basis(const EffectParameters<double>& frame, const EffectNode& node, int k, int joint) const override {
+    const double phase = 2.0 * pi<double>() * node.q(joint) / frame.screw_lead;
+    // k < screw count: the sine terms, then the cosine terms (parameter order).
+    const bool sine = k == joint;
+    return sine ? std::sin(phase) : std::cos(phase);
+  }
+  void store(EffectParameters<double>& out, int k, int joint, double v) const override {
+    if (k == joint)
+      out.cyclic_sin(joint) += v;
+    else
+      out.cyclic_cos(joint) += v;
+  }
+};
+
+class ThermalEffect final : public Effect {
+ public:
+  std::string name() const override { return "thermal"; }
+  std::string description() const override {
+    return "uniform thermal expansion of structure and actuators, lengths x (1 + c (T - 20 C))";
+  }
+  std::vector<std::string> parameter_names(const Robot&) const override { return {"c"}; }
+  std::string missing_inputs(const PoseTable& data) const override {
+    if (!data.has_temp) return "the data has no temp column";
+    double lo = 1e300, hi = -1e300;
+    for (const PoseRow& r : data.rows)
+      if (r.temp) lo = std::min(lo, *r.temp), hi = std::max(hi, *r.temp);
+    if (!(hi - lo > 0.05))
+      return "temp is constant (" + format_number(lo) +
+             " C): a uniform expansion at one temperature cannot be told from the geometry";
+    return {};
+  }
+  void twist_columns(const Robot&, const EffectParameters<double>& frame, const EffectNode& node,
+                     Eigen::Ref<Eigen::MatrixXd> columns) const override {
+    // d(reached)/dc = (T − T0)·(p − o), no rotation (core thermal_reached).
+    columns.setZero();
+    if (!node.temperature) return;
+    columns.col(0).head<3>() = (*node.temperature - frame.reference_temperature) * (node.pose.p - frame.thermal_origin);
+  }
+  void apply(const Robot&, const Eigen::VectorXd& values, EffectParameters<double>& out) const override {
+    out.thermal += values(0);
+  }
+};
+
+std::vector<std::shared_ptr<const Effect>>& registry_storage() {
+  static std::vector<std::shared_ptr<const Effect>> effects = {
+      std::make_shared<ScaleEffect>(), std::make_shared<BacklashEffect>(), std::make_shared<ComplianceEffect>(),
+      std::make_shared<ThermalEffect>(), std::make_shared<CyclicEffect>()};
+  return effects;
+}
+
+}  // namespace
+
+const std::vector<std::shared_ptr<const Effect>>& effect_registry() { return registry_storage(); }
+
+void register_effect(std::shared_ptr<const Effect> effect) {
+  auto& effects = registry_storage();
+  for (auto& e : effects)
+    if (e->name() == effect->name()) {
+      e = std::move(effect);
+      return;
+    }
+  effects.push_back(std::move(effect));
+}
+
+const Effect* find_effect(const std::string& name) {
+  for (const auto& e : effect_registry())
+    if (e->name() == name) return e.get();
+  return nullptr;
+}
+
+std::string effect_names() {
+  std::string out;
+  for (const auto& e : effect_registry()) out += (out.empty() ? "" : ", ") + e->name();
+  return out;
+}
+
+EffectParameters<double> effect_frame(const Robot& robot) {
+  EffectParameters<double> e;
+  e.screw_lead = robot.screw_lead;
+  e.screw_joints = std::uint8_t((1u << screw_joint_count(robot)) - 1u);
+  if (robot.is_hybrid()) {
+    // Poses are in the workpiece frame {R}: p_R = wR0·(p_0 − o) (hybrid.hpp).
+    const HybridGeometry<double>& g = robot.hybrid();
+    e.load_direction = g.workpiece_rotation * Vec3<double>(0, 0, -1);
+    e.thermal_origin = -(g.workpiece_rotation * g.workpiece_origin);
+  }
+  return e;
+}
+
+namespace {
+
+// Forward Jacobian (tool twist per unit joint error) at the nominal
+// configuration of a commanded pose; false when the IK fails or it is singular.
+bool forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>& J) {
+  if (robot.is_stewart()) {
+    Mat6<double> Jik;
+    if (stewart_ik(robot.stewart(), pose, q, &Jik) != Status::Ok) return false;
+    J = Jik.inverse();  // q̇ = J_ik·twist (stewart.hpp); the error model's dl columns are J_ik⁻¹
+    return all_finite(J);
+  }
+  const HybridGeometry<double>& g = robot.hybrid();
+  HybridPassive<double> passive;
+  if (hybrid_ik(g, pose, q, nullptr, &passive) != Status::Ok) return false;
+  const Vec3<double> wrist = q.tail<3>() + g.joint_offset.tail<3>();
+  return hybrid_forward_jacobian(g, hybrid_frames(g, passive, wrist), J);
+}
+
+}  // namespace
+
+std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const PoseTable& table) {
+  const EffectParameters<double> frame = effect_frame(robot);
+  std::vector<std::optional<EffectNode>> nodes(table.rows.size());
+  for (std::size_t k = 0; k < table.rows.size(); ++k) {
+    const PoseRow& row = table.rows[k];
+    EffectNode n;
+    n.pose = Pose<double>::from_xyz_rpy(row.commanded);
+    Vec6<double> q_ik;
+    if (!forward_jacobian(robot, n.pose, q_ik, n.joint_twist)) continue;
+    n.q = row.q ? Vec6<double>(row.q->head<6>()) : q_ik;
+    n.inputs.load = static_load_forward(n.joint_twist, frame.load_direction);
+    n.temperature = row.temp;
+    n.time = row.time;
+    if (row.dir) n.inputs.direction = row.dir->head<6>().cast<double>();
+    nodes[k] = n;
+  }
+  if (!table.has_dir) {
+    // Approach direction from the command sequence: the sign of the change
+    // from the previous node, kept while a joint stands still; before its
+    // first move a joint takes the direction of that move.
+    for (int j = 0; j < 6; ++j) {
+      double current = 0;
+      std::optional<double> previous_q;
+      std::vector<std::size_t> pending;
+      for (std::size_t k = 0; k < nodes.size(); ++k) {
+        if (!nodes[k]) continue;
+        const double qj = nodes[k]->q(j);
+        if (previous_q && std::abs(qj - *previous_q) > 1e-12 * (1 + std::abs(qj))) current = qj > *previous_q ? 1 : -1;
+        previous_q = qj;
+        if (current == 0) {
+          pending.push_back(k);
+          continue;
+        }
+        for (std::size_t p : pending) nodes[p]->inputs.direction(j) = current;
+        pending.clear();
+        nodes[k]->inputs.direction(j) = current;
+      }
+      for (std::size_t p : pending) nodes[p]->inputs.direction(j) = 1;
+    }
+  }
+  return nodes;
+}
+
+void EffectValues::set(const Robot& robot, const std::string& effect, const std::string& parameter, double value) {
+  const Effect* e = find_effect(effect);
+  if (e == nullptr) throw InputError("unknown effect '" + effect + "' (known: " + effect_names() + ")");
+  const std::vector<std::string> names = e->parameter_names(robot);
+  const auto it = std::find(names.begin(), names.end(), parameter);
+  if (it == names.end()) {
+    std::string known;
+    for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("effect '" + effect + "' has no parameter '" + parameter + "' for robot " + robot.name +
+                     " (parameters: " + known + ")");
+  }
+  if (!std::isfinite(value)) throw InputError("effect " + effect + ":" + parameter + ": value must be finite");
+  Eigen::VectorXd& v = values[effect];
+  if (v.size() == 0) v = Eigen::VectorXd::Zero(Eigen::Index(names.size()));
+  v(it - names.begin()) = value;
+}
+
+EffectParameters<double> EffectValues::to_core(const Robot& robot) const {
+  EffectParameters<double> out = effect_frame(robot);
+  for (const auto& [name, v] : values) {
+    const Effect* e = find_effect(name);
+    if (e == nullptr) throw InputError("unknown effect '" + name + "' (known: " + effect_names() + ")");
+    e->apply(robot, v, out);
+  }
+  return out;
+}
+
+bool EffectValues::needs_temperature() const {
+  const auto it = values.find("thermal");
+  return it != values.end() && !it->second.isZero();
+}
+
+Vec6<double> effect_actual_joints(const EffectParameters<double>& effects, const EffectNode& node) {
+  return node.q + effect_joint_error(effects, node.q, node.inputs);
+}
+
+}  // namespace kincal::identify
