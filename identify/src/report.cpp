@@ -85,7 +85,7 @@ svg .frame{fill:none;stroke:#888;stroke-width:1}svg .grid{stroke:#e6e6e6;stroke-
 svg .zero{stroke:#999;stroke-width:1}svg .noise{stroke:#000;stroke-width:1.3;stroke-dasharray:5 3;fill:none}
 svg .tile{stroke:#fff;stroke-width:.5}
 svg .nc{stroke:#111;stroke-width:3.6;stroke-linecap:round}svg .nt{fill:#fff;stroke:#111;stroke-width:1.2}
-svg .arrow{stroke:#111;stroke-width:1.3}
+svg .arrow{stroke:#111;stroke-width:1.3}svg .mc{stroke:#333;stroke-width:.7}svg .mt{stroke:#111;stroke-width:1.3}
 svg .pb{stroke:#e65100;stroke-opacity:.75;stroke-width:4;stroke-linecap:round}svg .pa{stroke:#1565c0;stroke-opacity:.75;stroke-width:4;stroke-linecap:round}
 svg .pbt{fill:#fff;stroke:#e65100;stroke-width:1.2}svg .pat{fill:#fff;stroke:#1565c0;stroke-width:1.2}
 svg .bc{fill:#5c6bc0}svg .bt{fill:#ef6c00}svg .lg{fill:none;stroke:#888}
@@ -176,7 +176,7 @@ struct MapFrame {
 
 // One x–y frame for every layer, with equal scales on x and y so the maps
 // are not distorted and layers compare directly.
-MapFrame map_frame(const Diagnosis& d, double tile_mm) {
+MapFrame map_frame(const Diagnosis& d, double tile_mm, double area_w) {
   svg::Range xr, yr;
   for (const auto& n : d.nodes)
     if (std::isfinite(n.commanded(0)) && std::isfinite(n.commanded(1))) {
@@ -189,21 +189,22 @@ MapFrame map_frame(const Diagnosis& d, double tile_mm) {
   f.margins.top = 28;
   f.margins.bottom = 36;
   if (xr.empty()) return f;
-  double x0 = xr.lo - tile_mm / 2, x1 = xr.hi + tile_mm / 2;
-  double y0 = yr.lo - tile_mm / 2, y1 = yr.hi + tile_mm / 2;
+  // Half a tile of margin, and at least 4 % so edge markers stay inside.
+  const double pad = std::max(tile_mm / 2, 0.04 * std::max(xr.hi - xr.lo, yr.hi - yr.lo));
+  double x0 = xr.lo - pad, x1 = xr.hi + pad;
+  double y0 = yr.lo - pad, y1 = yr.hi + pad;
   if (x1 - x0 <= 0) x0 -= 1, x1 += 1;
   if (y1 - y0 <= 0) y0 -= 1, y1 += 1;
-  const double area_w = 240;
   double area_h = area_w * (y1 - y0) / (x1 - x0);
   // Keep the picture between flat and tall; widen the other range instead of
   // stretching, so a millimetre stays a millimetre in both directions.
-  if (area_h > 330) {
-    area_h = 330;
+  if (area_h > 1.3 * area_w) {
+    area_h = 1.3 * area_w;
     const double need = (y1 - y0) * area_w / area_h, c = (x0 + x1) / 2;
     x0 = c - need / 2;
     x1 = c + need / 2;
-  } else if (area_h < 150) {
-    area_h = 150;
+  } else if (area_h < 0.6 * area_w) {
+    area_h = 0.6 * area_w;
     const double need = (x1 - x0) * area_h / area_w, c = (y0 + y1) / 2;
     y0 = c - need / 2;
     y1 = c + need / 2;
@@ -261,23 +262,51 @@ std::string map_panel(const Diagnosis& d, const std::vector<std::size_t>& idx, c
   // arrow states the scale: after calibration the pattern of what is left
   // matters, and on the before scale it would be invisible. The colour, not
   // the arrow length, compares before with after.
-  const double arrow_len = std::max(14.0, 0.85 * tile_px);
+  // Nodes on a regular grid get tiles (like the seed's interpolated maps):
+  // then n tiles cover about the nodes' bounding box. Scattered nodes
+  // (random poses) cover a quarter of it with isolated squares, so they get
+  // coloured markers instead and the arrows a fixed length.
+  svg::Range bx, by;
+  for (std::size_t i : idx) bx.add(d.nodes[i].commanded(0)), by.add(d.nodes[i].commanded(1));
+  const double box = bx.empty() ? 0 : std::max(bx.hi - bx.lo, tile_mm) * std::max(by.hi - by.lo, tile_mm);
+  const bool tiles = tile_px >= 10 && box > 0 && static_cast<double>(idx.size()) * tile_mm * tile_mm >= 0.6 * box;
+  const double arrow_len = tiles ? 0.85 * tile_px : 22.0;
   const double px_per_um = max_xy > 0 ? arrow_len / max_xy : 0;
 
-  for (std::size_t k = 0; k < idx.size(); ++k) {
+  auto tooltip = [&](const NodeResidual& n, const Vec3<double>& r, double mag) {
+    if (!tooltips) return std::string();
+    return n.id + (n.test ? " (test)" : " (cal)") + ": |r| = " + num(mag, 3) + " µm (" + num(r(0), 3) + ", " +
+           num(r(1), 3) + ", " + num(r(2), 3) + ")";
+  };
+  if (!tiles) {
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const auto& n = d.nodes[idx[k]];
+      const auto& r = residuals[k];
+      const double x = n.commanded(0), y = n.commanded(1);
+      if (p.inside(x, y) && r.allFinite() && px_per_um > 0)
+        p.arrow_px(p.px(x), p.py(y), p.px(x) + r(0) * px_per_um, p.py(y) - r(1) * px_per_um, "arrow");
+    }
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const auto& n = d.nodes[idx[k]];
+      const auto& r = residuals[k];
+      const double mag = r.allFinite() ? r.norm() : std::nan("");
+      const std::string fill = svg::heat_colour(colour.fraction(mag));
+      if (n.test)
+        p.diamond(n.commanded(0), n.commanded(1), 5.5, "mt", tooltip(n, r, mag), fill);
+      else
+        p.circle(n.commanded(0), n.commanded(1), 4.2, "mc", tooltip(n, r, mag), fill);
+    }
+  }
+  for (std::size_t k = 0; k < idx.size() && tiles; ++k) {
     const auto& n = d.nodes[idx[k]];
     const auto& r = residuals[k];
     const double x = n.commanded(0), y = n.commanded(1);
     if (!p.inside(x, y)) continue;
     const double mag = r.allFinite() ? r.norm() : std::nan("");
-    std::string tip;
-    if (tooltips)
-      tip = n.id + (n.test ? " (test)" : " (cal)") + ": |r| = " + num(mag, 3) + " µm (" + num(r(0), 3) + ", " +
-            num(r(1), 3) + ", " + num(r(2), 3) + ")";
     p.rect_px(p.px(x) - tile_px / 2, p.py(y) - tile_px / 2, tile_px, tile_px, svg::heat_colour(colour.fraction(mag)),
-              false, tip);
+              false, tooltip(n, r, mag));
   }
-  for (std::size_t k = 0; k < idx.size(); ++k) {
+  for (std::size_t k = 0; k < idx.size() && tiles; ++k) {
     const auto& n = d.nodes[idx[k]];
     const auto& r = residuals[k];
     const double x = n.commanded(0), y = n.commanded(1);
@@ -294,8 +323,10 @@ std::string map_panel(const Diagnosis& d, const std::vector<std::size_t>& idx, c
     test.push_back(d.nodes[i].test);
     cal.push_back(!d.nodes[i].test);
   }
-  p.dots(xs, ys, cal, "nc");
-  p.diamonds(xs, ys, test, 3.2, "nt");
+  if (tiles) {
+    p.dots(xs, ys, cal, "nc");
+    p.diamonds(xs, ys, test, 3.2, "nt");
+  }
   if (px_per_um > 0) {
     const double ref = nice_below(max_xy);
     const double len = ref * px_per_um;
@@ -308,10 +339,11 @@ std::string map_panel(const Diagnosis& d, const std::vector<std::size_t>& idx, c
 
 void write_maps(std::ostringstream& h, const Diagnosis& d) {
   h << "<h2 id=\"maps\">Residual maps per layer, before and after</h2>\n";
-  h << "<p class=\"how\">Each node sits at its commanded x–y position. The tile colour is the size of the tool-point "
-       "position residual |r| (3-D, µm) on one colour scale shared by every map, before (base model) and after "
-       "(with the accepted effects); the arrow is its x–y part, scaled per map (reference arrow at the top right). "
-       "● cal node (fitted), ◆ test node (held out, never fitted). Hover a tile for its values.</p>\n";
+  h << "<p class=\"how\">Each node sits at its commanded x–y position. Its colour (a tile on a grid of nodes, a "
+       "marker for scattered nodes) is the size of the tool-point position residual |r| (3-D, µm) on one colour "
+       "scale shared by every map, before (base model) and after (with the accepted effects); the arrow is its x–y "
+       "part, scaled per map (reference arrow at the top right). ● cal node (fitted), ◆ test node (held out, never "
+       "fitted). Hover a node for its values.</p>\n";
   if (d.nodes.empty()) {
     h << "<p class=\"dim\">No per-node residuals in this diagnosis.</p>\n";
     return;
@@ -338,11 +370,12 @@ void write_maps(std::ostringstream& h, const Diagnosis& d) {
   for (const auto& n : d.nodes) xr.add(n.commanded(0)), xr.add(n.commanded(1));
   if (!(tile_mm > 0)) tile_mm = xr.empty() || xr.hi == xr.lo ? 1.0 : 0.06 * (xr.hi - xr.lo);
 
-  const MapFrame frame = map_frame(d, tile_mm);
+  // One layer: room for bigger maps; several: two layers (four maps) a row.
+  const MapFrame frame = map_frame(d, tile_mm, groups.size() == 1 ? 400.0 : 240.0);
   const svg::Axis colour = magnitude_scale(d);
   const double noise_norm = finite_positive(d.noise_um) ? std::sqrt(3.0) * d.noise_um : -1;
   h << "<div class=\"panel\" style=\"display:inline-block\">"
-    << svg::colour_legend(colour, 420, std::string("tile colour: |r| (µm)") + (colour.log ? ", log scale" : ""),
+    << svg::colour_legend(colour, 420, std::string("node colour: |r| (µm)") + (colour.log ? ", log scale" : ""),
                           noise_norm, "√3·σ")
     << "</div>\n";
   // Tooltips cost ~100 bytes a tile; past a few hundred nodes the file size
@@ -476,45 +509,51 @@ void write_group_table(std::ostringstream& h, const std::string& title, const st
     h << "<p class=\"dim\">none</p>\n";
     return;
   }
+  // Bars show the ratio to the noise, not the RMS: the joint rows mix µm and
+  // µrad, each against its own noise level, and the ratio reads the same in
+  // every table (the dashed line at 1 is "at the noise level").
+  std::vector<double> ratios;
   svg::Range r;
-  for (const auto& g : groups) r.add(g.rms_um);
-  if (finite_positive(noise)) r.add(noise);
-  // Bars share one scale per table, logarithmic when a hot group would
-  // otherwise squash the others to nothing.
-  svg::Axis a;
-  if (!r.empty() && r.hi > 0) {
-    if (r.lo > 0 && r.hi / r.lo > 30) {
-      a.log = true;
-      a.lo = r.lo / 1.5;
-      a.hi = r.hi * 1.1;
-    } else {
-      a.lo = 0;
-      a.hi = r.hi * 1.05;
-    }
-  }
-  h << "<table class=\"t\"><tr><th>group</th><th>nodes</th><th>RMS (µm)</th><th>× noise</th><th>RMS vs noise (dashed)"
-    << (a.log ? ", log scale" : "") << "</th></tr>";
+  r.add(1.0);
   for (const auto& g : groups) {
     const double ratio = std::isfinite(g.ratio) && g.ratio != 0 ? g.ratio
-                         : finite_positive(noise)              ? g.rms_um / noise
-                                                               : std::nan("");
+                         : finite_positive(noise) && std::isfinite(g.rms_um) ? g.rms_um / noise
+                                                                             : std::nan("");
+    ratios.push_back(ratio);
+    r.add(ratio);
+  }
+  // One scale per table, logarithmic when a hot group would otherwise
+  // squash the others to nothing.
+  svg::Axis a;
+  a.lo = 0;
+  a.hi = r.hi * 1.05;
+  if (r.hi > 30) {
+    a.log = true;
+    a.lo = std::max(0.1, std::min(0.5, r.lo)) / 1.5;
+    a.hi = r.hi * 1.1;
+  }
+  h << "<table class=\"t\"><tr><th>group</th><th>nodes</th><th>RMS</th><th>× noise</th><th>RMS / noise"
+    << (a.log ? " (log scale)" : "") << "; dashed: 1</th></tr>";
+  for (std::size_t k = 0; k < groups.size(); ++k) {
+    const auto& g = groups[k];
+    const double ratio = ratios[k];
     const char* cls = !std::isfinite(ratio) ? "mid" : ratio <= 1.5 ? "ok" : ratio <= 3 ? "mid" : "bad";
-    const double w = std::isfinite(g.rms_um) ? std::clamp(a.fraction(g.rms_um), 0.0, 1.0) * 100 : 0;
+    const double w = std::isfinite(ratio) ? std::clamp(a.fraction(ratio), 0.0, 1.0) * 100 : 0;
     h << "<tr><td class=\"l\">" << escape(g.label) << "</td><td>" << g.nodes << "</td><td>" << num(g.rms_um, 3)
       << "</td><td>" << num(ratio, 3) << "</td><td><div class=\"bar\"><i class=\"" << cls << "\" style=\"width:"
-      << fixed(w, 1) << "%\"></i>";
-    if (finite_positive(noise))
-      h << "<b style=\"left:" << fixed(std::clamp(a.fraction(noise), 0.0, 1.0) * 100, 1) << "%\"></b>";
-    h << "</div></td></tr>";
+      << fixed(w, 1) << "%\"></i><b style=\"left:" << fixed(std::clamp(a.fraction(1.0), 0.0, 1.0) * 100, 1)
+      << "%\"></b></div></td></tr>";
   }
   h << "</table>\n";
 }
 
 void write_groups(std::ostringstream& h, const Diagnosis& d) {
-  h << "<h2 id=\"groups\">Residual by group</h2>\n";
-  h << "<p class=\"how\">RMS residual of the base model per coordinate in each group, against the noise σ (dashed "
-       "line; ratio in the “× noise” column). Green: within 1.5 σ; orange: up to 3 σ; red: above. A group well "
-       "above the rest points at where the model fails.</p>\n<div class=\"row\">";
+  h << "<h2 id=\"groups\">Residual left by the final model, by group</h2>\n";
+  h << "<p class=\"how\">What the final model (base + accepted effects) leaves, grouped. RMS is per measured "
+       "coordinate in µm; for the joints it is the implied joint-space residual in the unit of the label, against "
+       "that joint's own noise level; for a covariate it is the part of the residual that follows the covariate "
+       "linearly. The bar is the ratio to the noise: green within 1.5×, orange up to 3×, red above. A group well "
+       "above 1 points at where the model still fails.</p>\n<div class=\"row\">";
   const std::pair<const char*, const std::vector<ResidualGroup>*> tables[] = {
       {"by layer", &d.by_layer}, {"by joint", &d.by_joint}, {"by workspace region", &d.by_region},
       {"by covariate", &d.by_covariate}};
@@ -527,6 +566,9 @@ void write_groups(std::ostringstream& h, const Diagnosis& d) {
 }
 
 // ----------------------------------------------------------------- ranking
+
+// A p-value that underflowed to 0 is "too small to compute", not zero.
+std::string p_text(double p) { return p == 0 ? "≈ 0" : num(p, 2); }
 
 void write_ranking(std::ostringstream& h, const Diagnosis& d) {
   h << "<h2 id=\"ranking\">Candidate effects</h2>\n";
@@ -551,7 +593,7 @@ void write_ranking(std::ostringstream& h, const Diagnosis& d) {
     }
     h << "<tr" << (e.accepted ? " class=\"acc\"" : "") << "><td class=\"l\"><b>" << escape(e.effect) << "</b></td><td>"
       << (e.step > 0 ? std::to_string(e.step) : std::string("—")) << "</td><td>" << e.parameters << "</td><td>"
-      << num(e.score, 3) << "</td><td>" << num(e.p_value, 2) << "</td><td>" << num(e.p_adjusted, 2) << "</td><td>"
+      << num(e.score, 3) << "</td><td>" << p_text(e.p_value) << "</td><td>" << p_text(e.p_adjusted) << "</td><td>"
       << fixed(100 * e.confounded, 1) << " %</td><td>" << num(e.rms_after.cal, 3) << "</td><td>"
       << (e.rms_after.test_nodes || d.rms.test_nodes ? num(e.rms_after.test, 3) : std::string("—")) << "</td><td>"
       << (d.rms.test_nodes ? fixed(100 * e.test_gain, 1) + " %" : std::string("—")) << "</td><td>"

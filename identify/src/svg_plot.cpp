@@ -241,22 +241,26 @@ std::string tip(const std::string& tooltip) {
 
 }  // namespace
 
-void Plot::circle(double x, double y, double r, const std::string& cls, const std::string& tooltip) {
+void Plot::circle(double x, double y, double r, const std::string& cls, const std::string& tooltip,
+                  const std::string& fill) {
   if (!inside(x, y)) return;
   body_ << "<circle cx=\"" << fixed(px(x), 1) << "\" cy=\"" << fixed(py(y), 1) << "\" r=\"" << fixed(r, 1)
         << "\" class=\"" << cls << '"';
+  if (!fill.empty()) body_ << " style=\"fill:" << fill << '"';
   if (tooltip.empty())
     body_ << "/>";
   else
     body_ << '>' << tip(tooltip) << "</circle>";
 }
 
-void Plot::diamond(double x, double y, double r, const std::string& cls, const std::string& tooltip) {
+void Plot::diamond(double x, double y, double r, const std::string& cls, const std::string& tooltip,
+                   const std::string& fill) {
   if (!inside(x, y)) return;
   const double cx = px(x), cy = py(y);
   body_ << "<path d=\"M" << fixed(cx, 1) << ',' << fixed(cy - r, 1) << 'l' << fixed(r, 1) << ',' << fixed(r, 1)
         << 'l' << fixed(-r, 1) << ',' << fixed(r, 1) << 'l' << fixed(-r, 1) << ',' << fixed(-r, 1) << "z\" class=\""
         << cls << '"';
+  if (!fill.empty()) body_ << " style=\"fill:" << fill << '"';
   if (tooltip.empty())
     body_ << "/>";
   else

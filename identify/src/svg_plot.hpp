@@ -73,9 +73,12 @@ class Plot {
   // categorical x axis whose labels the caller draws.
   void draw_axes(bool x_ticks = true, bool grid = true);
 
-  // Markers in data coordinates; `cls` selects the CSS style.
-  void circle(double x, double y, double r, const std::string& cls, const std::string& tooltip = {});
-  void diamond(double x, double y, double r, const std::string& cls, const std::string& tooltip = {});
+  // Markers in data coordinates; `cls` selects the CSS style, `fill` (a
+  // colour) overrides its fill.
+  void circle(double x, double y, double r, const std::string& cls, const std::string& tooltip = {},
+              const std::string& fill = {});
+  void diamond(double x, double y, double r, const std::string& cls, const std::string& tooltip = {},
+               const std::string& fill = {});
   // Many markers as one <path> each: a dot is a zero-length segment with a
   // round cap ("M x y h0"), a diamond a closed subpath. ~15 bytes a point
   // instead of ~50 for separate elements; the report draws thousands.
