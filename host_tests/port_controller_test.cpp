@@ -207,7 +207,7 @@ TEST(PortController, HybridStreamEqualsTheCompensatorAndWritesTheEncoderOffsets)
   // The offsets are in the registers, in counts of 1 nm / 10 nrad.
   for (int ch = 0; ch < 6; ++ch) {
     const double xi = hybrid_calibrated().machine.encoder_offsets[ch];
-    EXPECT_EQ(rig.regs.value(ch), static_cast<std::int32_t>(std::lround(xi / rig.config.scaling.resolution(ch))));
+    EXPECT_EQ(rig.regs.value(ch), static_cast<std::int32_t>(std::lround(xi / rig.config.scaling.resolution[ch])));
   }
   const auto want = direct(hybrid_calibrated(), in);
   for (std::size_t k = 0; k < in.size(); ++k) {
@@ -480,7 +480,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(PortController, AnOffsetBeyondTheRegisterRangeIsRefused) {
   Rig<HybridM> rig(hybrid_calibrated(), hybrid_nominal());
-  rig.config.scaling.resolution(0) = 1e-13;  // 0.31 mm = 3.1e12 counts: does not fit
+  rig.config.scaling.resolution[0] = 1e-13;  // 0.31 mm = 3.1e12 counts: does not fit
   const auto in = hybrid_path(3);
   auto& ctl = rig.run(in);
   EXPECT_EQ(ctl.report().registers, PortStatus::OutOfRange);

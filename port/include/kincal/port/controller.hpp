@@ -59,6 +59,7 @@ namespace kincal::port {
 template <class Scalar> struct ControllerConfig {
   EncoderOffsetScaling<Scalar> scaling;  // counts of the offset registers
   int register_attempts = 3;             // write + read-back tries per channel
+  // Only read by the constructor (not kept):
   // Where the machine is at power-up (a real port reads it from the drives);
   // the held output until the first accepted point. Without it: the
   // compensated command at the machine's home pose.
@@ -112,14 +113,15 @@ template <class Machine, class Registers, class Stream> class Controller {
              const ControllerConfig<Scalar>& config = ControllerConfig<Scalar>())
       : registers_(registers),
         stream_(stream),
-        config_(config),
+        scaling_(config.scaling),
+        register_attempts_(config.register_attempts),
         report_(check_tables(calibration, nominal)),
         compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal) {
     counters_.table_failures =
         (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
-    Vec6<Scalar> initial = config_.initial_command;
-    if (!config_.has_initial_command && compensator_.home_command(initial) != CompensationStatus::Ok)
-      initial = config_.initial_command;
+    Vec6<Scalar> initial = config.initial_command;
+    if (!config.has_initial_command && compensator_.home_command(initial) != CompensationStatus::Ok)
+      initial = config.initial_command;
     state_ = compensator_.start(initial);
   }
 
@@ -127,11 +129,11 @@ template <class Machine, class Registers, class Stream> class Controller {
   const StartReport& start() {
     const Vec6<Scalar> offsets = encoder_offsets(compensator_.table());
     for (int ch = 0; ch < kEncoderChannels; ++ch) {
-      PortStatus st = config_.scaling.to_counts(ch, offsets(ch), report_.counts[ch]);
+      PortStatus st = scaling_.to_counts(ch, offsets(ch), report_.counts[ch]);
       const std::int32_t want = report_.counts[ch];
       int failed_attempts = 0;
       if (st == PortStatus::Ok) {
-        for (int attempt = 0; attempt < config_.register_attempts; ++attempt) {
+        for (int attempt = 0; attempt < register_attempts_; ++attempt) {
           std::int32_t back = 0;
           st = registers_.write_verified(ch, want, back);
           if (st == PortStatus::Ok) break;
@@ -141,7 +143,7 @@ template <class Machine, class Registers, class Stream> class Controller {
       std::int32_t held = 0;
       if (registers_.read(ch, held) == PortStatus::Ok) {
         report_.counts[ch] = held;
-        drive_offset_(ch) = config_.scaling.to_joint(ch, held);
+        drive_offset_(ch) = scaling_.to_joint(ch, held);
       }
       if (st != PortStatus::Ok) {
         ++counters_.register_failures;
@@ -182,11 +184,12 @@ template <class Machine, class Registers, class Stream> class Controller {
       case PortStatus::EndOfStream: return Cycle::End;
       default: ++counters_.io_errors; return Cycle::Error;
     }
-    JointCommand<Scalar> cmd = answer(in, r == PortStatus::Malformed);
-    const PortStatus s = stream_.send(cmd);
+    // The command is built in pending_ (no copy on the controller's stack)
+    // and stays there if the drives refuse it.
+    answer(in, r == PortStatus::Malformed, pending_);
+    const PortStatus s = stream_.send(pending_);
     if (s == PortStatus::Overrun) {
       ++counters_.output_overruns;
-      pending_ = cmd;
       has_pending_ = true;
       return Cycle::OutputBlocked;
     }
@@ -239,8 +242,8 @@ template <class Machine, class Registers, class Stream> class Controller {
     return r;
   }
 
-  JointCommand<Scalar> answer(const NcInput<Scalar>& in, bool malformed) {
-    JointCommand<Scalar> cmd;
+  void answer(const NcInput<Scalar>& in, bool malformed, JointCommand<Scalar>& cmd) {
+    cmd = JointCommand<Scalar>();
     cmd.sequence = in.sequence;
     ++counters_.points;
     // Sequence numbers: each point should follow the previous one.
@@ -257,7 +260,7 @@ template <class Machine, class Registers, class Stream> class Controller {
     }
     if (report_.nominal) cmd.flags |= kCommandNominalModel;
 
-    Vec6<Scalar> q;
+    Vec6<Scalar>& q = cmd.q;
     if (report_.registers != PortStatus::Ok) {
       // No verified encoder zero: no motion (see the file comment).
       cmd.port = report_.registers;
@@ -272,7 +275,7 @@ template <class Machine, class Registers, class Stream> class Controller {
         const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
         p.pose.p = Vec3<Scalar>::Constant(nan);
       } else {
-        p.pose = Pose<Scalar>::from_xyz_rpy(in.pose);
+        to_pose(in.pose, p.pose);
         p.temperature = in.temperature;
         p.has_temperature = in.has_temperature;
       }
@@ -283,13 +286,19 @@ template <class Machine, class Registers, class Stream> class Controller {
       ++counters_.held;
     else
       ++counters_.compensated;
-    cmd.q = q + drive_offset_;
-    return cmd;
+    q += drive_offset_;  // to the drive frame (see the file comment)
+  }
+
+  // Out of line: the rotation's temporaries get their own frame, which is
+  // gone before the compensation runs (worst-case stack, docs/benchmarks.md).
+  KINCAL_PORT_NOINLINE static void to_pose(const Vec6<Scalar>& xyz_rpy, Pose<Scalar>& pose) {
+    pose = Pose<Scalar>::from_xyz_rpy(xyz_rpy);
   }
 
   Registers& registers_;
   Stream& stream_;
-  ControllerConfig<Scalar> config_;
+  EncoderOffsetScaling<Scalar> scaling_;
+  int register_attempts_;
   StartReport report_;
   ControllerCounters counters_;
   Compensator<Machine> compensator_;

@@ -26,7 +26,6 @@
 namespace kincal::port {
 
 constexpr std::size_t kCsvIdCapacity = 32;   // id text incl. NUL
-constexpr std::size_t kCsvMaxFields = 64;    // columns of an input row
 constexpr std::size_t kCsvLineCapacity = 512;  // longest output line (≤ 423 B: see format())
 
 struct CsvId {
@@ -34,22 +33,26 @@ struct CsvId {
   std::size_t size = 0;
 };
 
-// One input row split into fields, in place: quotes removed, "" -> ".
-// Returns the number of fields, or -1 for a malformed quoted field.
-inline int csv_split(char* line, std::size_t size, char* (&begin)[kCsvMaxFields], char* (&end)[kCsvMaxFields]) {
-  int n = 0;
-  std::size_t i = 0;
-  for (;;) {
-    if (n == static_cast<int>(kCsvMaxFields)) return -1;
-    while (i < size && (line[i] == ' ' || line[i] == '\t')) ++i;
-    if (i < size && line[i] == '"') {
+// The fields of one input row, one at a time, unquoted in place ("" -> ");
+// no array of fields, so a row of any width costs a few words of stack.
+class CsvFieldCursor {
+ public:
+  CsvFieldCursor(char* line, std::size_t size) : line_(line), size_(size) {}
+
+  // The next field as [begin, end); false when the row has no more fields
+  // or a quoted field is malformed (then bad() is true).
+  bool next(char*& begin, char*& end) {
+    if (done_) return false;
+    std::size_t i = pos_;
+    while (i < size_ && (line_[i] == ' ' || line_[i] == '\t')) ++i;
+    if (i < size_ && line_[i] == '"') {
       ++i;
-      char* out = line + i;
-      begin[n] = out;
+      char* out = line_ + i;
+      begin = out;
       for (;;) {
-        if (i >= size) return -1;  // unterminated
-        if (line[i] == '"') {
-          if (i + 1 < size && line[i + 1] == '"') {
+        if (i >= size_) return fail();  // unterminated
+        if (line_[i] == '"') {
+          if (i + 1 < size_ && line_[i + 1] == '"') {
             *out++ = '"';
             i += 2;
             continue;
@@ -57,23 +60,36 @@ inline int csv_split(char* line, std::size_t size, char* (&begin)[kCsvMaxFields]
           ++i;
           break;
         }
-        *out++ = line[i++];
+        *out++ = line_[i++];
       }
-      end[n] = out;
-      while (i < size && (line[i] == ' ' || line[i] == '\t')) ++i;
-      if (i < size && line[i] != ',') return -1;
+      end = out;
+      while (i < size_ && (line_[i] == ' ' || line_[i] == '\t')) ++i;
+      if (i < size_ && line_[i] != ',') return fail();
     } else {
-      begin[n] = line + i;
-      while (i < size && line[i] != ',') ++i;
-      char* e = line + i;
-      while (e != begin[n] && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\r')) --e;
-      end[n] = e;
+      begin = line_ + i;
+      while (i < size_ && line_[i] != ',') ++i;
+      char* e = line_ + i;
+      while (e != begin && (e[-1] == ' ' || e[-1] == '\t' || e[-1] == '\r')) --e;
+      end = e;
     }
-    ++n;
-    if (i >= size) return n;
-    ++i;  // the comma
+    if (i >= size_)
+      done_ = true;
+    else
+      pos_ = i + 1;  // past the comma
+    return true;
   }
-}
+  bool bad() const { return bad_; }
+
+ private:
+  bool fail() {
+    bad_ = done_ = true;
+    return false;
+  }
+  char* line_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+  bool done_ = false, bad_ = false;
+};
 
 template <class Scalar> class PoseCsvReader {
  public:
@@ -97,50 +113,58 @@ template <class Scalar> class PoseCsvReader {
     std::size_t first = 0;
     while (first < size && (line[first] == ' ' || line[first] == '\t')) ++first;
     if (first == size || line[0] == '#') return LineResult::Skipped;
-    char* b[kCsvMaxFields];
-    char* e[kCsvMaxFields];
-    const int n = csv_split(line, size, b, e);
-    if (!have_header_) return read_header(n, b, e);
+    CsvFieldCursor cursor(line, size);
+    if (!have_header_) return read_header(cursor);
 
     ++rows_;
     point = NcInput<Scalar>();
     id = CsvId();
     point.sequence = rows_;  // default; replaced by a seq column
-    bool ok = n == fields_;
-    if (id_col_ >= 0 && id_col_ < n) {
-      const std::size_t len = static_cast<std::size_t>(e[id_col_] - b[id_col_]);
-      id.size = len < kCsvIdCapacity - 1 ? len : kCsvIdCapacity - 1;
-      for (std::size_t k = 0; k < id.size; ++k) id.text[k] = b[id_col_][k];
-    }
-    if (seq_col_ >= 0) {
-      double s = 0;
-      if (seq_col_ < n && parse_decimal(b[seq_col_], e[seq_col_], s) && s >= 0 && s < 4294967296.0 &&
-          s == static_cast<double>(static_cast<std::uint32_t>(s))) {
-        point.sequence = static_cast<std::uint32_t>(s);
-      } else {
-        ok = false;
-        point.sequence = last_sequence_ + 1;  // keep the count going
+    bool ok = true, seq_ok = seq_col_ < 0;
+    int seen = 0;  // pose, temperature and sequence fields found
+    char* b = nullptr;
+    char* e = nullptr;
+    int c = 0;
+    for (; cursor.next(b, e); ++c) {
+      if (c == id_col_) {
+        const std::size_t len = static_cast<std::size_t>(e - b);
+        id.size = len < kCsvIdCapacity - 1 ? len : kCsvIdCapacity - 1;
+        for (std::size_t k = 0; k < id.size; ++k) id.text[k] = b[k];
+        continue;
       }
-    }
-    last_sequence_ = point.sequence;
-    for (int k = 0; k < 6; ++k) {
       double v = 0;
-      if (pose_col_[k] < n && parse_decimal(b[pose_col_[k]], e[pose_col_[k]], v)) {
-        point.pose(k) = Scalar(v);
-      } else {
-        ok = false;
-        point.pose(k) = Scalar(0);
+      if (c == seq_col_) {
+        ++seen;
+        if (parse_decimal(b, e, v) && v >= 0 && v < 4294967296.0 &&
+            v == static_cast<double>(static_cast<std::uint32_t>(v))) {
+          point.sequence = static_cast<std::uint32_t>(v);
+          seq_ok = true;
+        }
+        continue;
+      }
+      if (c == temp_col_) {
+        ++seen;
+        if (parse_decimal(b, e, v)) {
+          point.temperature = Scalar(v);
+          point.has_temperature = true;
+        } else {
+          ok = false;
+        }
+        continue;
+      }
+      for (int k = 0; k < 6; ++k) {
+        if (c != pose_col_[k]) continue;
+        ++seen;
+        if (parse_decimal(b, e, v))
+          point.pose(k) = Scalar(v);
+        else
+          ok = false;
       }
     }
-    if (temp_col_ >= 0) {
-      double t = 0;
-      if (temp_col_ < n && parse_decimal(b[temp_col_], e[temp_col_], t)) {
-        point.temperature = Scalar(t);
-        point.has_temperature = true;
-      } else {
-        ok = false;
-      }
-    }
+    if (!seq_ok) point.sequence = last_sequence_ + 1;  // keep the count going
+    last_sequence_ = point.sequence;
+    const int wanted = 6 + (seq_col_ >= 0 ? 1 : 0) + (temp_col_ >= 0 ? 1 : 0);
+    if (cursor.bad() || c != fields_ || seen != wanted || !seq_ok) ok = false;
     point.valid = ok;
     return LineResult::Point;
   }
@@ -166,20 +190,23 @@ template <class Scalar> class PoseCsvReader {
     return b == e && *name == '\0';
   }
 
-  LineResult read_header(int n, char* const* b, char* const* e) {
-    if (n < 0) return LineResult::BadHeader;
+  LineResult read_header(CsvFieldCursor& cursor) {
     static constexpr const char* kPose[6] = {"x", "y", "z", "rx", "ry", "rz"};
     for (int k = 0; k < 6; ++k) pose_col_[k] = -1;
-    for (int c = 0; c < n; ++c) {
+    char* b = nullptr;
+    char* e = nullptr;
+    int c = 0;
+    for (; cursor.next(b, e); ++c) {
       for (int k = 0; k < 6; ++k)
-        if (is(b[c], e[c], kPose[k])) pose_col_[k] = c;
-      if (is(b[c], e[c], "id")) id_col_ = c;
-      if (is(b[c], e[c], "seq")) seq_col_ = c;
-      if (is(b[c], e[c], "temp")) temp_col_ = c;
+        if (is(b, e, kPose[k])) pose_col_[k] = c;
+      if (is(b, e, "id")) id_col_ = c;
+      if (is(b, e, "seq")) seq_col_ = c;
+      if (is(b, e, "temp")) temp_col_ = c;
     }
+    if (cursor.bad()) return LineResult::BadHeader;
     for (int k = 0; k < 6; ++k)
       if (pose_col_[k] < 0) return LineResult::BadHeader;
-    fields_ = n;
+    fields_ = c;
     have_header_ = true;
     return LineResult::Skipped;
   }

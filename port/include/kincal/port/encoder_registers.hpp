@@ -55,22 +55,26 @@ template <class Backend> class EncoderOffsetPort {
   Backend& backend() { return static_cast<Backend&>(*this); }
 };
 
-// Register counts <-> joint units. One count is `resolution` joint units
+// Register counts <-> joint units. One count is `resolution[i]` joint units
 // (mm for a prismatic joint, rad for a revolute one). The defaults resolve
 // 1 nm and 10 nrad, far below the calibration's noise, with an int32 range of
-// ±2147 mm and ±21 rad.
+// ±2147 mm and ±21 rad. A literal type, so a firmware keeps it in flash.
 template <class Scalar> struct EncoderOffsetScaling {
-  Vec6<Scalar> resolution = Vec6<Scalar>::Constant(Scalar(1e-6));
+  Scalar resolution[kEncoderChannels] = {Scalar(1e-6), Scalar(1e-6), Scalar(1e-6),
+                                         Scalar(1e-6), Scalar(1e-6), Scalar(1e-6)};
 
-  static EncoderOffsetScaling hybrid_default() {
+  // All prismatic (the 6-UPS legs).
+  static constexpr EncoderOffsetScaling prismatic() { return EncoderOffsetScaling(); }
+  // Three prismatic legs, three revolute wrist joints (the hybrid).
+  static constexpr EncoderOffsetScaling hybrid_default() {
     EncoderOffsetScaling s;
-    s.resolution << Scalar(1e-6), Scalar(1e-6), Scalar(1e-6), Scalar(1e-8), Scalar(1e-8), Scalar(1e-8);
+    for (int i = 3; i < kEncoderChannels; ++i) s.resolution[i] = Scalar(1e-8);
     return s;
   }
 
   // Nearest count; OutOfRange if the value is not finite or does not fit.
   PortStatus to_counts(int channel, Scalar offset, std::int32_t& counts) const {
-    const Scalar c = offset / resolution(channel);
+    const Scalar c = offset / resolution[channel];
     // 2^31 - 1 is exact in double; in float the bound rounds up to 2^31, so
     // compare strictly below it.
     constexpr Scalar kMax = Scalar(2147483647.0);
@@ -79,7 +83,7 @@ template <class Scalar> struct EncoderOffsetScaling {
     return PortStatus::Ok;
   }
 
-  Scalar to_joint(int channel, std::int32_t counts) const { return Scalar(counts) * resolution(channel); }
+  Scalar to_joint(int channel, std::int32_t counts) const { return Scalar(counts) * resolution[channel]; }
 };
 
 }  // namespace kincal::port

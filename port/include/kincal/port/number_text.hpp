@@ -10,9 +10,10 @@
 //     path: one exact integer times or over one exact power of ten, rounded
 //     once) — every number `kincal` writes with up to 15-16 significant digits
 //     and every hand-written pose. Otherwise within a few ulps.
-//   format: fixed point with 12 decimals (|v| < 1e9): error ≤ 0.5e-12 plus
-//     one rounding, i.e. ≤ 1e-12 mm / rad; larger values in scientific form
-//     with 16 decimals.
+//   format: fixed point with (up to) 12 decimals, trailing zeros dropped
+//     (|v| < 1e9): error ≤ 0.5e-12 plus one rounding, i.e. ≤ 1e-12 mm / rad
+//     where the double itself resolves that (|v| < 2^13); larger values in scientific form
+//     with 15 significant digits.
 #pragma once
 
 #include <cmath>
@@ -117,33 +118,43 @@ inline bool parse_decimal(const char* begin, const char* end, double& out) {
     }
     exponent10 += negative_exponent ? -e : e;
   }
+  // The significand as a double through two 32-bit halves: exact up to 2^53,
+  // and on a Cortex-M it is two VFP conversions, where a 64-bit conversion
+  // would pull in libgcc's software double arithmetic.
+  const double m = static_cast<double>(static_cast<std::uint32_t>(mantissa >> 32)) * 4294967296.0 +
+                   static_cast<double>(static_cast<std::uint32_t>(mantissa & 0xFFFFFFFFu));
   double value;
   if (mantissa == 0) {
     value = 0.0;
   } else if (mantissa <= (std::uint64_t(1) << 53) && exponent10 >= -22 && exponent10 <= 22) {
     // Clinger's fast path: both operands exact, one rounding.
-    const double m = static_cast<double>(mantissa);
     value = exponent10 >= 0 ? m * detail::kPow10[exponent10] : m / detail::kPow10[-exponent10];
   } else {
-    value = detail::scale10(static_cast<double>(mantissa), exponent10);
+    value = detail::scale10(m, exponent10);
   }
   out = negative ? -value : value;
   return true;
 }
 
 // Writes v into buf (no terminating NUL); returns the number of characters,
-// at most 32. buf must have room for 32.
+// at most 32. buf must have room for 32. Only 32-bit integer arithmetic (no
+// 64-bit division, no log10: each would add kilobytes of library code to a
+// firmware image).
 inline std::size_t format_decimal(double v, char* buf) {
   std::size_t n = 0;
   auto put = [&](char c) { buf[n++] = c; };
-  auto put_uint = [&](std::uint64_t x, int min_digits) {
-    char tmp[20];
-    int k = 0;
-    do {
-      tmp[k++] = static_cast<char>('0' + static_cast<int>(x % 10u));
+  // Exactly `digits` decimal digits of x < 10^digits (zero-padded).
+  auto put_digits = [&](std::uint32_t x, int digits) {
+    for (int k = digits - 1; k >= 0; --k) {
+      buf[n + static_cast<std::size_t>(k)] = static_cast<char>('0' + static_cast<int>(x % 10u));
       x /= 10u;
-    } while (x != 0u || k < min_digits);
-    while (k > 0) put(tmp[--k]);
+    }
+    n += static_cast<std::size_t>(digits);
+  };
+  auto put_uint = [&](std::uint32_t x) {
+    int digits = 1;
+    for (std::uint32_t t = x; t >= 10u; t /= 10u) ++digits;
+    put_digits(x, digits);
   };
   if (v != v) {
     put('n'), put('a'), put('n');
@@ -157,41 +168,57 @@ inline std::size_t format_decimal(double v, char* buf) {
   }
   if (a < 1e9) {
     // Fixed point, 12 decimals: the integer and the fractional part are both
-    // exact in double, the fraction times 10^12 is rounded once.
+    // exact in double, the fraction times 10^12 is rounded once; its two
+    // 6-digit halves are exact too (integers below 2^53).
     double ip = std::floor(a);
     double fraction = std::nearbyint((a - ip) * 1e12);
     if (fraction >= 1e12) {
       fraction -= 1e12;
       ip += 1.0;
     }
-    put_uint(static_cast<std::uint64_t>(ip), 1);
+    const double high = std::floor(fraction / 1e6);
+    put_uint(static_cast<std::uint32_t>(ip));
     put('.');
-    put_uint(static_cast<std::uint64_t>(fraction), 12);
+    put_digits(static_cast<std::uint32_t>(high), 6);
+    put_digits(static_cast<std::uint32_t>(fraction - high * 1e6), 6);
+    // Trailing zeros say nothing, and without them our own parser reads the
+    // text back on its exact path more often (fewer significant digits).
+    while (buf[n - 1] == '0' && buf[n - 2] != '.') --n;
     return n;
   }
-  // Scientific, 17 significant digits: d.dddddddddddddddde±XXX.
-  int e = static_cast<int>(std::floor(std::log10(a)));
-  double scaled = detail::scale10(a, 16 - e);
-  if (scaled >= 1e17) {
-    ++e;
-    scaled = detail::scale10(a, 16 - e);
-  }
-  std::uint64_t m = static_cast<std::uint64_t>(std::nearbyint(scaled));
-  if (m >= 100000000000000000ull) {  // rounding carried into an 18th digit
-    m /= 10u;
+  // Scientific, 15 significant digits (an integer below 2^53, so exact in
+  // double): d.dddddddddddddde±XXX. Joint commands and poses never get here.
+  int e = 0;
+  double scaled = a;
+  while (scaled >= 1e15) {
+    scaled /= 10.0;
     ++e;
   }
-  char digits[17];
-  for (int k = 16; k >= 0; --k) {
-    digits[k] = static_cast<char>('0' + static_cast<int>(m % 10u));
-    m /= 10u;
+  while (scaled < 1e14) {
+    scaled *= 10.0;
+    --e;
+  }
+  scaled = detail::scale10(a, -e);  // one rounding from a, not a chain of them
+  double m = std::nearbyint(scaled);
+  if (m >= 1e15) {
+    ++e;
+    m = std::nearbyint(detail::scale10(a, -e));
+  }
+  e += 14;  // the exponent of the leading digit
+  const double high = std::floor(m / 1e7);
+  char digits[15];
+  {
+    std::uint32_t hi = static_cast<std::uint32_t>(high), lo = static_cast<std::uint32_t>(m - high * 1e7);
+    for (int k = 14; k >= 8; --k, lo /= 10u) digits[k] = static_cast<char>('0' + static_cast<int>(lo % 10u));
+    for (int k = 7; k >= 0; --k, hi /= 10u) digits[k] = static_cast<char>('0' + static_cast<int>(hi % 10u));
   }
   put(digits[0]);
   put('.');
-  for (int k = 1; k < 17; ++k) put(digits[k]);
+  for (int k = 1; k < 15; ++k) put(digits[k]);
   put('e');
   put(e < 0 ? '-' : '+');
-  put_uint(static_cast<std::uint64_t>(e < 0 ? -e : e), 2);
+  const std::uint32_t ae = static_cast<std::uint32_t>(e < 0 ? -e : e);
+  put_digits(ae, ae >= 100u ? 3 : 2);
   return n;
 }
 

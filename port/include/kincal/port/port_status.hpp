@@ -7,6 +7,14 @@
 
 #include <cstdint>
 
+// Keeps a function out of its callers, so its locals do not add to the frame
+// of a caller that goes on to call deeper (the controller's stack budget).
+#if defined(__GNUC__)
+#define KINCAL_PORT_NOINLINE __attribute__((noinline))
+#else
+#define KINCAL_PORT_NOINLINE
+#endif
+
 namespace kincal::port {
 
 enum class PortStatus : std::uint8_t {
