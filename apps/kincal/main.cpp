@@ -14,8 +14,12 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
+#include "kincal/core/compensation.hpp"
+#include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
@@ -287,12 +291,17 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot))
     throw ki::InputError(model_path, 0, 0,
                          "was identified on robot '" + model.nominal.name + "', not on " + robot_name);
-  // 6-UPS: IK of the corrected geometry (seed 001); hybrid: correct the pose
-  // by the predicted error twist, then the ideal IK with the identified
-  // encoder offsets (seed 000 Eq. (16)).
-  const ki::Robot calibrated = robot.is_stewart() ? ki::calibrated_robot(model) : robot;
-  std::optional<ki::HybridCompensation> hybrid;
-  if (robot.is_hybrid()) hybrid = ki::hybrid_compensation_from_model(model);
+  // The controller's own routine (core/compensation.hpp) on the table the
+  // firmware gets from `kincal table`: 6-UPS IK of the calibrated geometry
+  // (seed 001); hybrid: the pose corrected by the predicted error twist, then
+  // the ideal IK with the identified encoder offsets (seed 000 Eq. (16));
+  // then the joint-space effects and the bound / limit checks.
+  ki::AnyCalibrationTable table;
+  try {
+    table = ki::calibration_table(model);
+  } catch (const ki::InputError& e) {
+    throw ki::InputError(model_path, 0, 0, e.message());
+  }
   ki::PoseTableOptions options;
   options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
   const ki::PoseTable poses = ki::read_pose_table(poses_path, options);
@@ -302,26 +311,49 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   out.has_layer = poses.has_layer;
   out.has_role = poses.has_role;
   std::size_t failed = 0;
-  for (const ki::PoseRow& r : poses.rows) {
-    ki::PoseRow o;
-    o.id = r.id;
-    o.layer = r.layer;
-    o.role = r.role;
-    o.commanded = r.commanded;
-    kincal::Vec6<double> q;
-    // seed 001's compensation: the IK of the corrected geometry.
-    const kincal::Pose<double> want = kincal::Pose<double>::from_xyz_rpy(r.commanded);
-    const kincal::Status s = hybrid ? ki::compensate_hybrid(*hybrid, want, q) : calibrated.inverse(want, q);
-    o.status = kincal::to_string(s);
-    if (s == kincal::Status::Ok) {
-      o.q = Eigen::VectorXd(q);
-    } else {
-      ++failed;
-      std::cerr << poses_path << ":" << r.line << ": warning: row '" << r.id << "': " << kincal::to_string(s)
-                << "; written without joint commands\n";
-    }
-    out.rows.push_back(o);
-  }
+  std::visit(
+      [&](const auto& t) {
+        const kincal::Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
+        if (compensator.status() != kincal::CompensationStatus::Ok)
+          throw ki::InputError(model_path, 0, 0,
+                               std::string("calibration table: ") + kincal::to_string(compensator.status()));
+        // The stream starts with the machine at its home pose, approach
+        // directions +1, as the firmware does (docs/compensation.md).
+        kincal::Vec6<double> home = kincal::Vec6<double>::Zero();
+        if (compensator.home_command(home) != kincal::CompensationStatus::Ok)
+          warn(model_path + ": warning: the home pose cannot be compensated; the stream starts from zero commands");
+        auto state = compensator.start(home);
+        for (const ki::PoseRow& r : poses.rows) {
+          ki::PoseRow o;
+          o.id = r.id;
+          o.layer = r.layer;
+          o.role = r.role;
+          o.commanded = r.commanded;
+          kincal::NcPoint<double> point;
+          point.pose = kincal::Pose<double>::from_xyz_rpy(r.commanded);
+          if (r.temp) {
+            point.temperature = *r.temp;
+            point.has_temperature = true;
+          }
+          kincal::Vec6<double> dir;
+          if (r.dir && r.dir->size() >= 6) {
+            dir = r.dir->head<6>().cast<double>();
+            point.direction = &dir;
+          }
+          kincal::Vec6<double> q;
+          const kincal::CompensationStatus s = compensator.compensate(state, point, q);
+          o.status = kincal::to_string(s);
+          if (s == kincal::CompensationStatus::Ok) {
+            o.q = Eigen::VectorXd(q);
+          } else {
+            ++failed;
+            std::cerr << poses_path << ":" << r.line << ": warning: row '" << r.id << "': " << kincal::to_string(s)
+                      << "; written without joint commands\n";
+          }
+          out.rows.push_back(o);
+        }
+      },
+      table);
   out.has_status = failed > 0;
   if (failed == poses.rows.size()) throw ki::InputError(poses_path, 0, 0, "no pose could be compensated");
   ki::write_pose_table_file(out, out_path);

@@ -280,10 +280,20 @@ template <class Machine> class Compensator {
       nominal_q.template head<3>() = f.legs.colwise().norm().transpose();
       nominal_q.template tail<3>() = angles;
       nominal_q -= model_.nominal.joint_offset;
-      if (compliance_) {
-        Mat6<Scalar> Jf;
-        if (!hybrid_forward_jacobian(model_.nominal, f, Jf)) return CS::Singular;
-        load = static_load_forward(Jf, effects_.load_direction);
+      {
+        // The singularity test of the NC point (parallel and wrist, as
+        // hybrid_ik's with the Jacobian: J_f in dimensionless form), and J_f's
+        // top rows give the static load (compliance).
+        SmallLu<Scalar, 6> lu;
+        auto Jf = lu.storage();
+        Mat6<Scalar> J;
+        if (!hybrid_forward_jacobian(model_.nominal, f, J)) return CS::Singular;
+        if (compliance_) load = static_load_forward(J, effects_.load_direction);
+        const Scalar L = model_.nominal.characteristic_length;
+        Jf = J;
+        Jf.template bottomRows<3>() *= L;
+        Jf.template rightCols<3>() *= Scalar(1) / L;
+        if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return CS::Singular;
       }
       Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
       if (model_.structural) {

@@ -1,0 +1,83 @@
+// The compensation benchmark cases, shared by the Google Benchmark program and
+// the callgrind harness: "a full identified model" of each machine as a
+// CalibrationTable, and the NC points the compensator is fed.
+//
+//   hybrid: hybrid-seed000 with seed 000's encoder offsets (the sizes of
+//     examples/hybrid-seed000/errors.csv) and all 144 structural errors
+//     non-zero (uniform ±1e-4, mm or rad: every term of B·Δχ̂ counts), so
+//     every point runs the full Eq. (16) path; "+effects" adds scale,
+//     backlash, compliance, cyclic and thermal (with a temperature input).
+//   6-UPS: stewart-seed001 with a calibrated geometry (every hinge and leg
+//     length off by up to 50 µm); "+effects" as above.
+// The points cycle through 8 poses around bench_cases.hpp's target, so the
+// joints move and reverse as in a real NC stream.
+#pragma once
+
+#include "bench_cases.hpp"
+#include "kincal/core/compensation.hpp"
+
+namespace kincal::bench {
+
+inline double lcg_uniform(unsigned& s, double lo, double hi) {
+  s = s * 1664525u + 1013904223u;
+  return lo + (hi - lo) * double(s >> 8) / double(1u << 24);
+}
+
+template <class Machine> CalibrationTable<Machine> add_effects(CalibrationTable<Machine> t) {
+  for (int i = 0; i < 6; ++i) {
+    t.effects.scale[i] = 1e-4 * (i % 2 == 0 ? 1 : -1);
+    t.effects.backlash[i] = i < 3 ? -0.01 : -2e-5;
+    t.effects.compliance[i] = i < 3 ? 2e-3 : 1e-6;
+    t.effects.cyclic_sin[i] = i < 3 ? 0.002 : 0.0;
+    t.effects.cyclic_cos[i] = i < 3 ? -0.0015 : 0.0;
+  }
+  t.effects.thermal = 1.2e-5;
+  if (t.effects.screw_joints == 0) t.effects.screw_joints = 63;
+  return seal_table(t);
+}
+
+inline HybridCalibrationTable<double> hybrid_full_model(bool effects) {
+  const HybridGeometry<double> g = make_hybrid_seed000<double>();
+  EffectParameters<double> frame;
+  frame.load_direction = g.workpiece_rotation * Vec3<double>(0, 0, -1);
+  frame.thermal_origin = -(g.workpiece_rotation * g.workpiece_origin);
+  frame.screw_joints = 0x07;
+  HybridCalibrationTable<double> t = nominal_table(g, 345.0, frame);
+  const double xi[6] = {0.3, -0.25, 0.2, 5e-4, -4e-4, 3e-4};
+  for (int i = 0; i < 6; ++i) t.machine.encoder_offsets[i] = xi[i];
+  unsigned s = 12345u;
+  for (int k = 6; k < kHybridSourceErrorCount; ++k) t.machine.source_errors[k] = lcg_uniform(s, -1e-4, 1e-4);
+  t = seal_table(t);
+  return effects ? add_effects(t) : t;
+}
+
+inline StewartCalibrationTable<double> stewart_full_model(bool effects) {
+  const StewartGeometry<double> g = make_stewart_seed001<double>();
+  StewartGeometry<double> cal = g;
+  unsigned s = 777u;
+  for (int i = 0; i < 6; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      cal.base(k, i) += lcg_uniform(s, -0.05, 0.05);
+      cal.platform(k, i) += lcg_uniform(s, -0.05, 0.05);
+    }
+    cal.length_offset(i) = lcg_uniform(s, -0.05, 0.05);
+  }
+  StewartCalibrationTable<double> t = nominal_table(g);
+  t.machine.calibrated = to_table(cal);
+  t = seal_table(t);
+  return effects ? add_effects(t) : t;
+}
+
+constexpr int kPointCount = 8;
+
+// 8 NC points around the target of bench_cases.hpp (mm, rad).
+template <class S> Pose<S> nc_point(MachineFamily family, int k) {
+  static const double d[kPointCount][3] = {{0, 0, 0},  {4, -2, 1},  {9, 1, -1}, {5, 6, 2},
+                                           {-3, 4, 0}, {-8, -1, 1}, {-2, -7, -2}, {1, -3, 0}};
+  const Pose<S> base = family == MachineFamily::Hybrid ? hybrid_target<S>() : stewart_target<S>();
+  Pose<S> p = base;
+  p.p += Vec3<S>(S(d[k][0]), S(d[k][1]), S(d[k][2]));
+  return p;
+}
+
+}  // namespace kincal::bench
