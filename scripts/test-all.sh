@@ -22,13 +22,28 @@ run_stage() {
   (cd "$dir" && ctest --output-on-failure -j "$jobs")
 }
 
+# The firmware stages' end-to-end test (examples/firmware) runs the host
+# kincal tool (simulate, identify, table, compensate): build/host's, built
+# here if the host stage has not done it already.
+host_tool() {
+  if [ ! -f build/host/CMakeCache.txt ]; then
+    cmake -S . -B build/host -G Ninja -DCMAKE_BUILD_TYPE=Release > build/host.configure.log 2>&1 \
+      || { cat build/host.configure.log; return 1; }
+  fi
+  echo "=== host tool for the firmware end-to-end test: build/host/apps/kincal"
+  cmake --build build/host -j "$jobs" --target kincal > build/host.tool.log 2>&1 \
+    || { tail -50 build/host.tool.log; return 1; }
+}
+
 mkdir -p build
 for stage in "${stages[@]}"; do
   case $stage in
     host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
     sanitize) run_stage sanitize -DCMAKE_BUILD_TYPE=Debug -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_BENCHMARKS=OFF ;;
-    m7)       run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake ;;
-    m4f)      run_stage m4f -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m4f.cmake ;;
+    m7)       host_tool
+              run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
+    m4f)      host_tool
+              run_stage m4f -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m4f.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
     *) echo "unknown stage '$stage' (host, sanitize, m7, m4f)" >&2; exit 2 ;;
   esac
 done
