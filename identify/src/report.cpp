@@ -80,7 +80,7 @@ table.t tr.acc td{background:#e8f5e9}table.t tr.nt td{color:#777;background:#faf
 footer{color:#777;font-size:12px;margin-top:30px}
 svg text{font-family:system-ui,Helvetica,Arial,sans-serif;font-size:11px;fill:#222}
 svg text.ttl{font-size:12px;font-weight:600}svg text.lbl{font-size:11px;fill:#333}svg text.tick{font-size:10px;fill:#555}
-svg text.nl{font-size:10px;fill:#000}svg text.val{font-size:10px;fill:#333}
+svg text.nl{font-size:10px;fill:#000}svg text.val{font-size:10px;fill:#333;paint-order:stroke;stroke:#fff;stroke-width:3px}
 svg .frame{fill:none;stroke:#888;stroke-width:1}svg .grid{stroke:#e6e6e6;stroke-width:1}
 svg .zero{stroke:#999;stroke-width:1}svg .noise{stroke:#000;stroke-width:1.3;stroke-dasharray:5 3;fill:none}
 svg .tile{stroke:#fff;stroke-width:.5}
@@ -637,6 +637,9 @@ void write_steps(std::ostringstream& h, const Diagnosis& d) {
   xa.hi = static_cast<double>(d.steps.size());
   p.set_axes(xa, ya);
   p.draw_axes(false);
+  // The noise line goes under the bars and its label into the legend: the
+  // last bars end right at it when all is well, with their value labels.
+  if (finite_positive(d.noise_um)) p.hline(d.noise_um, "noise");
   const double base_y = p.bottom();
   for (std::size_t k = 0; k < d.steps.size(); ++k) {
     const auto& s = d.steps[k];
@@ -663,9 +666,6 @@ void write_steps(std::ostringstream& h, const Diagnosis& d) {
       p.text_px(cx, p.bottom() + 27, model.size() > 24 ? model.substr(0, 22) + "…" : model, "tick");
     }
   }
-  // The noise label goes into the legend: on the line it would collide with
-  // the value labels of the last bars, which end right there when all is well.
-  if (finite_positive(d.noise_um)) p.hline(d.noise_um, "noise");
   p.rect_px(p.left() + 8, 9, 10, 10, "bc");
   p.text_px(p.left() + 22, 18, "cal", "lbl", "start");
   double lx = p.left() + 52;
