@@ -7,6 +7,8 @@
 #include <optional>
 #include <string>
 
+#include "kincal/identify/robot.hpp"
+
 namespace kincal_app {
 
 struct DiagnoseArgs {
@@ -17,5 +19,10 @@ struct DiagnoseArgs {
 };
 CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& args);
 int run_diagnose(const DiagnoseArgs& args);
+
+// `kincal identify --effects e1,e2`: base model and effects together
+// (identify/effect_calibration.hpp).
+int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,
+                              const std::string& effects, const std::string& estimator, const std::string& json);
 
 }  // namespace kincal_app

@@ -1,5 +1,7 @@
 // `kincal diagnose` (GUIDE "Command-line contract"; docs/diagnosis.md).
+#include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 
@@ -85,7 +87,8 @@ int run_diagnose(const DiagnoseArgs& a) {
       continue;
     }
     std::cout << ": F = " << t.score << ", p(Holm) = " << t.p_adjusted << ", test RMS -> " << um(t.rms_after.test)
-              << ", confounded " << int(t.confounded * 100 + 0.5) << " %\n";
+              << ", confounded " << std::fixed << std::setprecision(1) << t.confounded * 100 << std::defaultfloat
+              << std::setprecision(6) << " %\n";
   }
   std::cout << "  verdict: " << d.verdict << "; final RMS cal " << um(d.final_rms.cal) << ", test "
             << um(d.final_rms.test) << "\n";

@@ -211,8 +211,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
 
 int run_identify(const IdentifyArgs& a) {
   const ki::Robot robot = ki::load_robot(a.robot);
-  if (!a.effects.empty())
-    throw ki::InputError("--effects: the effects library is not available yet (issue #4)");
+  if (!a.effects.empty()) return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json);
   if (robot.is_hybrid()) {
     ki::PoseTableOptions options;
     options.warn = [](const std::string& w) { std::cerr << w << "\n"; };

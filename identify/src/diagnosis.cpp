@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -24,6 +25,8 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
+#include "base_fit.hpp"
+#include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/gauge.hpp"
@@ -44,102 +47,20 @@ using Eigen::VectorXd;
 // A 6-UPS measures orientation too; a rotation counts as the displacement it
 // causes 200 mm from its axis (as in stewart_calibration.cpp), so every
 // residual coordinate is in mm and one noise level applies to all.
-constexpr double kOrientationWeightMm = 200.0;
 constexpr double kMicro = 1000.0;  // mm → µm
 
-bool usable(const PoseRow& r) { return r.status.empty() || r.status == "ok"; }
-
-struct NodeData {
-  std::size_t row = 0;
-  bool test = false;
-  VectorXd r;  // base-model residual in measurement space, mm
-  MatrixXd M;  // measurement map: Δy = M·twist
-  MatrixXd H;  // base design rows at the solution
-  EffectNode effect;
-};
-
-struct BaseModel {
-  std::string description;
-  Index rows_per_node = 0;
-  Index parameters = 0;
-  std::vector<NodeData> nodes;
-};
-
-// ---- base models -------------------------------------------------------------
-
-BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
-  const StewartCalibration cal = calibrate_stewart(robot, data);
-  const StewartGeometry<double> g = stewart_with_errors(robot.stewart(), cal.theta);
-  BaseModel base;
-  base.description = "seed 001 42-parameter model (iterated LS, " + std::to_string(cal.history.size()) + " rounds)";
-  base.rows_per_node = 6;
-  base.parameters = kStewartParameterCount;
-  Vec6<double> w;
-  w << 1, 1, 1, kOrientationWeightMm, kOrientationWeightMm, kOrientationWeightMm;
-  for (std::size_t k = 0; k < data.rows.size(); ++k) {
-    const PoseRow& row = data.rows[k];
-    if (!row.measured || !usable(row) || !en[k]) continue;
-    const Pose<double> measured = Pose<double>::from_xyz_rpy(*row.measured);
-    Pose<double> predicted;
-    if (stewart_fk(g, en[k]->q, measured, predicted).status != Status::Ok) continue;
-    NodeData n;
-    n.row = k;
-    n.test = row.role == Role::Test;
-    n.r = w.asDiagonal() * pose_error(measured, predicted);
-    n.M = w.asDiagonal();
-    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted);
-    n.effect = *en[k];
-    base.nodes.push_back(std::move(n));
-  }
-  return base;
-}
-
-BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
-  HybridCalibrationOptions opt;
-  const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
-  // OLS, not Liu: the diagnosis refits the base columns anyway, and an
-  // unbiased fit leaves a residual orthogonal to them (the F tests assume it).
-  const HybridCompensation comp = cal.compensation(HybridFineEstimator::Ols);
-  const HybridGeometry<double>& g0 = robot.hybrid();
-  const HybridGeometry<double> gc = comp.controller_geometry();
-  const bool structural = comp.structural.size() > 0;
-  BaseModel base;
-  base.description = "seed 000 coarse + fine model (" + std::to_string(cal.kept.size()) + " identifiable of " +
-                     std::to_string(HybridErrorModel::kParameterCount) + " source errors)";
-  base.rows_per_node = 9;
-  base.parameters = Index(cal.kept.size());
-  MatrixXd B(6, HybridErrorModel::kParameterCount);
-  for (std::size_t k = 0; k < data.rows.size(); ++k) {
-    const PoseRow& row = data.rows[k];
-    if (!row.targets || !usable(row) || !en[k]) continue;
-    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-    HybridPassive<double> guess = g0.home;
-    Vec6<double> q_ik;
-    if (hybrid_ik(g0, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
-    Pose<double> predicted;
-    if (hybrid_fk(gc, en[k]->q, guess, predicted).status != Status::Ok) continue;
-    if (comp.model->error_jacobian(commanded, B) != Status::Ok) continue;
-    if (structural) predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
-    const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
-    NodeData n;
-    n.row = k;
-    n.test = row.role == Role::Test;
-    n.r.resize(9);
-    for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
-    n.M = gauge_map(g0, robot.gauge_radius, predicted);
-    n.H.resize(9, base.parameters);
-    for (Index j = 0; j < base.parameters; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
-    n.effect = *en[k];
-    base.nodes.push_back(std::move(n));
-  }
-  return base;
-}
+using detail::BaseModel;
+using detail::NodeData;
 
 // ---- linear algebra ----------------------------------------------------------
 
 // Least squares by a rank-revealing complete orthogonal decomposition of the
 // column-scaled design (columns in mm and rad, or per unit of an effect input,
 // differ by orders of magnitude; never the normal equations).
+// Relative rank threshold of the column-scaled designs (KINCAL_RANK_THRESHOLD
+// overrides it for experiments).
+const double kRankThreshold = std::getenv("KINCAL_RANK_THRESHOLD") ? std::atof(std::getenv("KINCAL_RANK_THRESHOLD")) : 1e-10;
+
 class LeastSquares {
  public:
   explicit LeastSquares(const MatrixXd& X) : scale_(X.cols()) {
@@ -147,7 +68,7 @@ class LeastSquares {
       const double n = X.col(j).norm();
       scale_(j) = n > 0 ? n : 1.0;
     }
-    cod_.setThreshold(1e-10);
+    cod_.setThreshold(kRankThreshold);
     cod_.compute(X * scale_.cwiseInverse().asDiagonal());
   }
   VectorXd solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
@@ -296,8 +217,7 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
 
   progress("fitting the base model on the cal rows");
   const std::vector<std::optional<EffectNode>> en = effect_nodes(robot, data);
-  BaseModel base;
-  base = robot.is_stewart() ? stewart_base(robot, data, en) : hybrid_base(robot, data, en);
+  const BaseModel base = detail::fit_base(robot, data, en, "ols", true);
   d.base_model = base.description;
 
   // Stacks per role.
@@ -322,7 +242,6 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
     d.notes.push_back("no test rows: effects are accepted on significance alone (no held-out check)");
 
   // Candidate effects and their columns.
-  const EffectParameters<double> frame = effect_frame(robot);
   std::vector<const Effect*> candidates;
   for (const auto& e : effect_registry()) {
     if (!options.candidates.empty() &&
@@ -338,18 +257,8 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
       continue;
     }
     candidates.push_back(e.get());
-    for (Stack* s : {&cal, &test}) {
-      MatrixXd G(s->y.size(), t.parameters);
-      MatrixXd twist(6, t.parameters);
-      Index r = 0;
-      for (std::size_t k : s->node) {
-        const NodeData& n = base.nodes[k];
-        e->twist_columns(robot, frame, n.effect, twist);
-        G.middleRows(r, n.r.size()) = n.M * twist;
-        r += n.r.size();
-      }
-      s->G[e->name()] = G;
-    }
+    cal.G[e->name()] = detail::effect_columns(robot, *e, base, false);
+    test.G[e->name()] = detail::effect_columns(robot, *e, base, true);
   }
   const Index n_cal = cal.y.size();
   if (n_cal <= base.parameters)
@@ -372,18 +281,21 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
   const bool noise_known = d.noise_source != "estimated";
   const double sigma_mm = d.noise_um / kMicro;
 
-  auto consistent = [&](const FitResult& f) {
+  auto consistent_rms = [&](double rss, Index rank, double test_ss, Index test_n) {
     if (!noise_known || !(sigma_mm > 0)) return false;
-    const double dof = double(n_cal - f.rank);
-    if (chi2_upper_tail(f.rss / (sigma_mm * sigma_mm), dof) < options.alpha) return false;
-    if (f.r_test.size() > 0) {
+    const double dof = double(n_cal - rank);
+    if (chi2_upper_tail(rss / (sigma_mm * sigma_mm), dof) < options.alpha) return false;
+    if (test_n > 0) {
       // Held-out rows also carry the spread of the estimate (leverage): allow
       // ~(1 + p/n) on the variance plus a 3σ band of χ²/ν.
-      const double nt = double(f.r_test.size());
-      const double expected = sigma_mm * sigma_mm * (1.0 + double(f.rank) / double(n_cal));
-      if (f.r_test.squaredNorm() / nt > expected * (1.0 + 3.0 * std::sqrt(2.0 / nt))) return false;
+      const double nt = double(test_n);
+      const double expected = sigma_mm * sigma_mm * (1.0 + double(rank) / double(n_cal));
+      if (test_ss / nt > expected * (1.0 + 3.0 * std::sqrt(2.0 / nt))) return false;
     }
     return true;
+  };
+  auto consistent = [&](const FitResult& f) {
+    return consistent_rms(f.rss, f.rank, f.r_test.squaredNorm(), f.r_test.size());
   };
 
   // Stepwise search.
@@ -392,7 +304,10 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
   d.steps.push_back({{"base"}, base_fit.rms});
   std::map<std::string, EffectTest> latest;
   for (int step = 1; step <= int(candidates.size()); ++step) {
-    if (consistent(current)) break;
+    // Step 1 always ranks the candidates (the user sees what each would add);
+    // effects are accepted only while the residual is not yet at the noise.
+    const bool at_noise = consistent(current);
+    if (at_noise && step > 1) break;
     progress("step " + std::to_string(step) + ": testing " + std::to_string(candidates.size() - accepted.size()) +
              " candidate effects");
     std::vector<EffectTest> tests;
@@ -440,14 +355,19 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
       running = std::max(running, adj);
       tests[order[i]].p_adjusted = running;
     }
+    // The most significant effect first (p-values compare tests of different
+    // column counts, F scores do not); F breaks ties where p underflows.
+    auto stronger = [](const EffectTest& a, const EffectTest& b) {
+      return a.p_value < b.p_value || (a.p_value == b.p_value && a.score > b.score);
+    };
     const EffectTest* best = nullptr;
     for (const EffectTest& t : tests) {
       const bool significant = t.p_adjusted < options.alpha;
       const bool helps = test.node.empty() || t.test_gain >= options.min_test_gain;
-      if (significant && helps && (best == nullptr || t.score > best->score)) best = &t;
+      if (significant && helps && (best == nullptr || stronger(t, *best))) best = &t;
     }
     for (const EffectTest& t : tests) latest[t.effect] = t;
-    if (best == nullptr) break;
+    if (best == nullptr || at_noise) break;
     latest[best->effect].accepted = true;
     accepted.push_back(best->effect);
     current = fit(cal, test, accepted);
@@ -459,14 +379,6 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
   }
   d.accepted = accepted;
   d.final_rms = current.rms;
-  if (!noise_known) {
-    const double dof = double(n_cal - current.rank);
-    d.noise_um = dof > 0 ? std::sqrt(current.rss / dof) * kMicro : 0.0;
-    d.notes.push_back(
-        "noise estimated from the final model's cal residual (no --noise-um, no repeated nodes): a systematic residual "
-        "the candidates do not explain would be counted as noise; give the tracker uncertainty for a verdict");
-  }
-
   // Ranking: accepted in order, then by score; untestable last.
   {
     std::vector<EffectTest> ranked;
@@ -474,7 +386,9 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
     std::vector<EffectTest> rest;
     for (const auto& [name, t] : latest)
       if (!t.accepted) rest.push_back(t);
-    std::sort(rest.begin(), rest.end(), [](const EffectTest& a, const EffectTest& b) { return a.score > b.score; });
+    std::sort(rest.begin(), rest.end(), [](const EffectTest& a, const EffectTest& b) {
+      return a.p_value < b.p_value || (a.p_value == b.p_value && a.score > b.score);
+    });
     ranked.insert(ranked.end(), rest.begin(), rest.end());
     for (const EffectTest& t : d.ranking) ranked.push_back(t);  // the untestable ones
     d.ranking = ranked;
@@ -492,7 +406,13 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
   }
 
   // Verdict.
-  const bool final_consistent = noise_known ? consistent(current) : true;
+  // GUIDE: "explained" = the accepted effects bring the held-out residuals to
+  // the noise level; with no test rows the cal residual decides.
+  auto held_out_at_noise = [&](const FitResult& f) {
+    if (f.r_test.size() == 0) return consistent(f);
+    return consistent_rms(0.0, f.rank, f.r_test.squaredNorm(), f.r_test.size());
+  };
+  const bool final_consistent = noise_known ? (accepted.empty() ? consistent(current) : held_out_at_noise(current)) : true;
   if (noise_known) {
     if (accepted.empty() && final_consistent)
       d.verdict = "consistent";

@@ -54,6 +54,17 @@ std::string model_to_json(const CalibrationModel& model) {
     params.push_back({{"name", p.name}, {"value", p.value}, {"standard_error", p.standard_error},
                       {"identifiable", p.identifiable}});
   j["parameters"] = params;
+  // Physical effects (identify/effects.hpp): {"scale": {"s1": 1e-4, ...}, ...}.
+  json effects = json::object();
+  for (const auto& [name, values] : model.effects.values) {
+    const Effect* e = find_effect(name);
+    if (e == nullptr) continue;
+    const std::vector<std::string> names = e->parameter_names(model.nominal);
+    json v = json::object();
+    for (std::size_t i = 0; i < names.size() && Eigen::Index(i) < values.size(); ++i) v[names[i]] = values(Eigen::Index(i));
+    effects[name] = v;
+  }
+  if (!effects.empty()) j["effects"] = effects;
   return j.dump(2) + "\n";
 }
 
@@ -108,6 +119,20 @@ static CalibrationModel parse_model_json(const json& j, const std::string& file)
       mp.standard_error = finite_number(*se, "standard_error of " + mp.name, file);
     if (const auto id = p.find("identifiable"); id != p.end() && id->is_boolean()) mp.identifiable = id->get<bool>();
     m.parameters.push_back(mp);
+  }
+  if (const auto effects = j.find("effects"); effects != j.end()) {
+    if (!effects->is_object()) fail(file, "\"effects\" must be an object of effect name -> {parameter: value}");
+    for (const auto& [name, params_of] : effects->items()) {
+      if (!params_of.is_object()) fail(file, "effect \"" + name + "\" must be an object of parameter -> value");
+      for (const auto& [pname, value] : params_of.items()) {
+        const double v = finite_number(value, "effect " + name + ":" + pname, file);
+        try {
+          m.effects.set(m.nominal, name, pname, v);
+        } catch (const InputError& e) {
+          fail(file, e.message());
+        }
+      }
+    }
   }
   return m;
 }

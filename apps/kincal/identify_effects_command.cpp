@@ -1,0 +1,65 @@
+// `kincal identify --effects e1,e2` (identify/effect_calibration.hpp).
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/effect_calibration.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/model.hpp"
+
+namespace ki = kincal::identify;
+
+namespace kincal_app {
+
+int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
+                              const std::string& effects, const std::string& estimator, const std::string& json_path) {
+  if (!estimator.empty() && estimator != (robot.is_hybrid() ? "liu" : "ols") && !(robot.is_hybrid() && estimator == "ols"))
+    throw ki::InputError("--estimator " + estimator + " with --effects: use " +
+                         (robot.is_hybrid() ? "liu (default) or ols" : "ols (default)"));
+  std::vector<std::string> names;
+  std::stringstream list(effects);
+  for (std::string name; std::getline(list, name, ',');)
+    if (!name.empty()) names.push_back(name);
+  ki::PoseTableOptions options;
+  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+  const ki::PoseTable data = ki::read_pose_table(data_path, options);
+  std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
+  ki::EffectCalibrationOptions opt;
+  opt.estimator = estimator;
+  ki::EffectCalibrationReport report;
+  const ki::CalibrationModel model = ki::calibrate_with_effects(robot, data, names, opt, &report);
+  for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
+    std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
+  std::cout << "  final: cal " << report.rms_cal_um_final << " um, test " << report.rms_test_um_final << " um\n";
+  nlohmann::ordered_json values = nlohmann::ordered_json::object();
+  for (const auto& [name, v] : model.effects.values) {
+    const std::vector<std::string> pn = ki::find_effect(name)->parameter_names(robot);
+    std::cout << "  " << name << ":";
+    for (std::size_t i = 0; i < pn.size(); ++i) {
+      std::cout << " " << pn[i] << "=" << v(Eigen::Index(i));
+      values[name][pn[i]] = v(Eigen::Index(i));
+    }
+    std::cout << "\n";
+  }
+  ki::write_model_file(model, out);
+  if (!json_path.empty()) {
+    nlohmann::ordered_json j;
+    j["robot"] = robot.name;
+    j["data"] = data_path;
+    j["estimator"] = model.estimator;
+    j["effects"] = values;
+    j["passes"] = report.passes;
+    j["residual_rms_um"] = {{"cal", report.rms_cal_um_final}, {"test", report.rms_test_um_final}};
+    j["outliers"] = nlohmann::ordered_json::array();
+    std::ofstream f(json_path);
+    if (!f) throw ki::InputError(json_path, 0, 0, "cannot open for writing");
+    f << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace kincal_app

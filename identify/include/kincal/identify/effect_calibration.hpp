@@ -1,0 +1,39 @@
+// Identification with physical effects (`kincal identify --effects e1,e2`):
+// the base model of the robot family and the effects' parameters together.
+// The base model stays the family's own nonlinear calibration; the effects
+// enter by alternation: fit the base on the data as the effect-free model
+// should see it (joints as the machine really had them, thermal expansion
+// taken out — detail::effect_corrected_table), refit the effects jointly with
+// the base columns on the remaining residual (one linear step), repeat until
+// the effect values settle. docs/effects.md.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+struct EffectCalibrationOptions {
+  std::string estimator;  // "" = the family default (6-UPS ols, hybrid liu); "ols" for the hybrid's OLS
+  int max_passes = 6;
+  double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)
+};
+
+struct EffectCalibrationReport {
+  int passes = 0;
+  std::vector<double> rms_cal_um;  // cal residual RMS per pass (measurement coordinates)
+  double rms_cal_um_final = 0, rms_test_um_final = 0;
+};
+
+// Throws InputError for an unknown effect name, an effect whose inputs the
+// data lacks (e.g. thermal without a temp column), or whatever the base
+// calibration rejects.
+CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
+                                        const EffectCalibrationOptions& options = {},
+                                        EffectCalibrationReport* report = nullptr);
+
+}  // namespace kincal::identify

@@ -1,0 +1,63 @@
+// The base model of a diagnosis or an identification with effects, as a
+// linear problem at its solution (private to identify/): the family's own
+// nonlinear calibration (seed 001's iterated LS for a 6-UPS; seed 000's coarse
+// + fine stages for the hybrid), then per measured node the residual r in
+// measurement space, the measurement map M (Δy = M·twist) and the base design
+// rows H at the solution. Effects add columns M·(tool twist per parameter).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify::detail {
+
+// A 6-UPS measures orientation too; a rotation counts as the displacement it
+// causes 200 mm from its axis (as in stewart_calibration.cpp), so every
+// residual coordinate is in mm and one noise level applies to all.
+constexpr double kOrientationWeightMm = 200.0;
+
+struct NodeData {
+  std::size_t row = 0;
+  bool test = false;
+  Eigen::VectorXd r;  // base-model residual in measurement space, mm
+  Eigen::MatrixXd M;  // measurement map: Δy = M·twist
+  Eigen::MatrixXd H;  // base design rows at the solution
+  EffectNode effect;  // effect inputs at the node (commands as sent)
+};
+
+struct BaseModel {
+  std::string description;
+  Eigen::Index parameters = 0;
+  std::vector<NodeData> nodes;
+  CalibrationModel model;  // the fitted base model (no effects)
+};
+
+// `fit_data`: the table the base model is fitted on and compared with (the
+// measurements, possibly corrected for effects); `nodes`: effect_nodes of the
+// original table (same rows). `estimator`: "" for the family default.
+// `finish_least_squares`: the hybrid's seed 000 estimate (one fine step from
+// the coarse machine) is finished by Gauss–Newton steps to the OLS minimum —
+// what a residual diagnosis needs; identification keeps seed 000's estimate
+// (its Liu shrinkage is what keeps the ill-conditioned fit stable).
+BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
+                   const std::string& estimator = {}, bool finish_least_squares = false);
+
+// The table as the effect-free model should see it: q1..q6 := the joints the
+// machine really had (commands + Δq of the joint-space effects), measured
+// poses / gauge targets scaled back about the base origin by 1/(1 + ε) of the
+// thermal effect.
+PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
+                                 const std::vector<std::optional<EffectNode>>& nodes, const EffectParameters<double>& e);
+
+// Effect columns of the nodes of `base` whose role matches `test`, stacked
+// like their residuals.
+Eigen::MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseModel& base, bool test);
+
+}  // namespace kincal::identify::detail
