@@ -309,6 +309,10 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   out.has_q = true;
   out.has_layer = poses.has_layer;
   out.has_role = poses.has_role;
+  // Covariates pass through, so the joints can be re-simulated on the machine
+  // (temperature for thermal, time stamps) in the same file.
+  out.has_temp = poses.has_temp;
+  out.has_time = poses.has_time;
   std::size_t failed = 0;
   std::visit(
       [&](const auto& t) {
@@ -328,6 +332,8 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
           o.layer = r.layer;
           o.role = r.role;
           o.commanded = r.commanded;
+          o.temp = r.temp;
+          o.time = r.time;
           kincal::NcPoint<double> point;
           point.pose = kincal::Pose<double>::from_xyz_rpy(r.commanded);
           if (r.temp) {
