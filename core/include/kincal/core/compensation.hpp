@@ -105,14 +105,14 @@ template <class S> struct Model<HybridMachine<S>> {
   HybridGeometry<S> nominal;     // B is evaluated on it; q_nom
   HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK of Eq. (16)
   const S* source_errors = nullptr;  // Δχ̂, read in place from the table
-  S up_split = S(0);
+  HybridErrorReference<S> reference;  // constants of the error frames
   bool structural = false;  // any Δχ̂ ≠ 0
   void load(const HybridMachine<S>& m) {
     nominal = to_core(m.nominal);
     controller = nominal;
     for (int i = 0; i < 6; ++i) controller.joint_offset(i) += m.encoder_offsets[i];
     source_errors = m.source_errors;
-    up_split = m.up_split;
+    reference = hybrid_error_reference(nominal, m.up_split);
     structural = false;
     for (int k = 0; k < kHybridSourceErrorCount; ++k) structural = structural || m.source_errors[k] != S(0);
   }
@@ -280,27 +280,18 @@ template <class Machine> class Compensator {
       nominal_q.template head<3>() = f.legs.colwise().norm().transpose();
       nominal_q.template tail<3>() = angles;
       nominal_q -= model_.nominal.joint_offset;
-      {
-        // The singularity test of the NC point (parallel and wrist, as
-        // hybrid_ik's with the Jacobian: J_f in dimensionless form), and J_f's
-        // top rows give the static load (compliance).
-        SmallLu<Scalar, 6> lu;
-        auto Jf = lu.storage();
-        Mat6<Scalar> J;
-        if (!hybrid_forward_jacobian(model_.nominal, f, J)) return CS::Singular;
-        if (compliance_) load = static_load_forward(J, effects_.load_direction);
-        const Scalar L = model_.nominal.characteristic_length;
-        Jf = J;
-        Jf.template bottomRows<3>() *= L;
-        Jf.template rightCols<3>() *= Scalar(1) / L;
-        if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return CS::Singular;
-      }
+      // The singularity test of the NC point (parallel, constraint and wrist:
+      // hybrid_wrenches), with J_P factorised once for the error twist.
+      HybridWrenches<Scalar> w;
+      s = hybrid_wrenches(model_.nominal, f, w);
+      if (s != Status::Ok) return to_compensation_status(s);
+      if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
       Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
       if (model_.structural) {
         // seed 000 Eq. (16): the predicted error twist at the nominal
         // configuration, removed from the requested pose before the ideal IK.
         Twist<Scalar> t;
-        s = hybrid_error_twist(model_.nominal, model_.up_split, f, model_.source_errors, t);
+        s = hybrid_error_twist(model_.nominal, model_.reference, f, w, model_.source_errors, t);
         if (s != Status::Ok) return to_compensation_status(s);
         target = apply_twist(target, Twist<Scalar>(-t));
       }

@@ -113,125 +113,172 @@ template <class Scalar> Mat3<Scalar> columns(const Vec3<Scalar>& a, const Vec3<S
   return m;
 }
 
-// Adds Ad(R, A − P)·Δη of one error frame (seed 000 Eq.) to `t`.
-// kind 0: all six components; 1: revolute joint frame (Δγ omitted);
-// 2: prismatic joint frame (Δz omitted). Returns the number of components read.
+// Adds Ad(R, A − P)·Δη of one error frame (seed 000 Eq.) to `t`; kind 1:
+// revolute joint frame (Δx, Δy, Δz, Δα, Δβ; Δγ is the joint's own).
 template <class Scalar>
-int add_frame(Twist<Scalar>& t, const NonDeducedT<Mat3<Scalar>>& R, const NonDeducedT<Vec3<Scalar>>& r, int kind,
-              const Scalar* e) {
-  Vec3<Scalar> lin, ang;
-  if (kind == 0) {
-    lin << e[0], e[1], e[2];
-    ang << e[3], e[4], e[5];
-  } else if (kind == 1) {
-    lin << e[0], e[1], e[2];
-    ang << e[3], e[4], Scalar(0);
-  } else {
-    lin << e[0], e[1], Scalar(0);
-    ang << e[2], e[3], e[4];
-  }
-  const Vec3<Scalar> w = R * ang;
-  t.template head<3>() += R * lin + r.cross(w);
+void add_revolute_frame(Twist<Scalar>& t, const NonDeducedT<Mat3<Scalar>>& R, const NonDeducedT<Vec3<Scalar>>& r,
+                        const Scalar* e) {
+  const Vec3<Scalar> w = R.col(0) * e[3] + R.col(1) * e[4];
+  t.template head<3>() += R.col(0) * e[0] + R.col(1) * e[1] + R.col(2) * e[2] + r.cross(w);
   t.template tail<3>() += w;
-  return kind == 0 ? 6 : 5;
 }
 
 }  // namespace hybrid_twist_detail
 
-// $_t = B·Δχ at the configuration `f` (hybrid_frames_at_pose), as (v at P, ω)
-// in {R}: exactly the twist identify's error_jacobian(pose)·Δχ gives.
-// `errors` points at the 150 entries of Δχ (HybridErrorLayout). `up_split` is
-// e = |A44 A64|. Writes `twist` only on Ok; Singular when J_P (Eq. (5)) is.
+// The parallel part's wrench matrix J_P (seed 000 Eq. (5)) at a configuration,
+// factorised: rows are the UPS actuation wrenches ŝ_wa,i (unit force along the
+// leg u_i through A6i) and the UP limb's constraint wrenches (forces along
+// w2 = y1 and n1 = w2 × w through A0, the couple n3 = w2 × x0), acting on
+// twists (v at P, ω) as f·v + m·ω. Stored dimensionless (angular columns / L).
+template <class Scalar> struct HybridWrenches {
+  SmallLu<Scalar, 6> lu;
+  Vec3<Scalar> u[3];  // unit leg vectors u_i (A1i → A6i)
+};
+
+// The constants of the error frames that depend on the nominal geometry only
+// (identify's model fixes them at the reference configuration: all joint
+// angles 0, c = home extension): each UPS limb's reference leg u_r,i and
+// horizontal U axis t_i, and e = |A44 A64|.
+template <class Scalar> struct HybridErrorReference {
+  Vec3<Scalar> leg[3];
+  Vec3<Scalar> axis[3];
+  Scalar up_split = Scalar(345);
+};
+
 template <class Scalar>
-Status hybrid_error_twist(const HybridGeometry<Scalar>& g, Scalar up_split, const HybridFrames<Scalar>& f,
-                          const Scalar* errors, Twist<Scalar>& twist) {
-  using hybrid_twist_detail::add_frame;
+HybridErrorReference<Scalar> hybrid_error_reference(const HybridGeometry<Scalar>& g, Scalar up_split) {
+  HybridErrorReference<Scalar> r;
+  const Vec3<Scalar> c_ref = g.home.extension * Vec3<Scalar>::UnitZ();  // platform centre at the reference
+  for (int i = 0; i < 3; ++i) {
+    Vec3<Scalar> ur = c_ref + g.platform_joints.col(i) - g.base_joints.col(i);
+    ur.normalize();
+    Vec3<Scalar> t = ur.cross(Vec3<Scalar>::UnitZ());
+    if (t.norm() < Scalar(1e-6)) t = Vec3<Scalar>::UnitX();  // a vertical leg: any horizontal axis
+    t.normalize();
+    r.leg[i] = ur;
+    r.axis[i] = t;
+  }
+  r.up_split = up_split;
+  return r;
+}
+
+// Builds and factorises J_P at `f`, and is the controller's singularity test
+// of the configuration: the tool twist is $ = J_P⁻¹·[q̇_UPS; 0] + J_S·θ̇
+// (Eqs. (5), (6)), so J_f = [J_P⁻¹·E | J_S] and det J_f = det(W_c·J_S) / det J_P:
+// J_f is singular exactly when J_P is (a parallel / constraint singularity) or
+// when the 3×3 W_c·J_S is (the wrist screws lose rank against the UP limb's
+// constraints). Both are judged by the pivot ratio of the dimensionless matrix
+// (rows / columns in mm divided by L), as everywhere in core. Status Singular
+// or Ok; `w` is usable only on Ok.
+template <class Scalar>
+Status hybrid_wrenches(const HybridGeometry<Scalar>& g, const HybridFrames<Scalar>& f, HybridWrenches<Scalar>& w) {
+  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
+  const Vec3<Scalar>& P = f.P;
+  const Scalar inv_L = Scalar(1) / g.characteristic_length;
+  auto JP = w.lu.storage();
+  for (int i = 0; i < 3; ++i) {
+    const Vec3<Scalar> u = f.legs.col(i).normalized();
+    w.u[i] = u;
+    JP.template block<1, 3>(i, 0) = u.transpose();
+    JP.template block<1, 3>(i, 3) = (Vec3<Scalar>(f.platform_joints.col(i) - P).cross(u) * inv_L).transpose();
+  }
+  const Vec3<Scalar> n1 = f.y1.cross(f.w), n3 = f.y1.cross(ex);
+  JP.template block<1, 3>(3, 0) = f.y1.transpose();
+  JP.template block<1, 3>(3, 3) = (P.cross(f.y1) * (-inv_L)).transpose();  // (A0 − P) × y1
+  JP.template block<1, 3>(4, 0) = n1.transpose();
+  JP.template block<1, 3>(4, 3) = (P.cross(n1) * (-inv_L)).transpose();
+  JP.template block<1, 3>(5, 0).setZero();
+  JP.template block<1, 3>(5, 3) = (n3 * inv_L).transpose();
+  if (!w.lu.factor() || !(w.lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return Status::Singular;
+  // W_c·J_S: a force f through A0 on the screw of axis a through p gives
+  // f·(p × a); the couple n3 gives n3·a. Joint 4's axis w passes through A0.
+  SmallLu<Scalar, 3> lu3;
+  auto X = lu3.storage();
+  const Vec3<Scalar> m5 = f.Q.cross(f.F5.col(0)) * inv_L, m6 = f.P0.cross(f.F5.col(1)) * inv_L;
+  X << Scalar(0), f.y1.dot(m5), f.y1.dot(m6),  //
+      Scalar(0), n1.dot(m5), n1.dot(m6),         //
+      n3.dot(f.w), n3.dot(f.F5.col(0)), n3.dot(f.F5.col(1));
+  if (!lu3.factor() || !(lu3.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return Status::Singular;
+  return Status::Ok;
+}
+
+// $_t = B·Δχ at the configuration `f` (hybrid_frames_at_pose) with J_P
+// factorised by hybrid_wrenches, as (v at P, ω) in {R}: exactly the twist
+// identify's error_jacobian(pose)·Δχ gives. `errors` points at the 150
+// entries of Δχ (HybridErrorLayout). Writes `twist` only on Ok (InvalidInput
+// if it is not finite).
+//
+// Where the sum is cheaper than the matrix: a limb's errors reach the twist
+// only through its row of J_P (Eq. (5): J_P⁻¹·G_P). For a UPS limb that row is
+// a force along the leg line through A1i and A6i, and every error frame of the
+// limb sits at A1i or A6i, so ŝ_wa,iᵀ·Ad(R_f, A_f − P)·Δη_f = u_i·(R_f·Δp_f):
+// only each frame's translation error along the leg counts (the moments of
+// the rotation errors about the leg line vanish). Likewise the UP limb's
+// frames all sit at A0, where its two constraint forces pass: they see Σ R_f·Δp_f,
+// the constraint couple sees Σ R_f·Δθ_f.
+template <class Scalar>
+Status hybrid_error_twist(const HybridGeometry<Scalar>& g, const HybridErrorReference<Scalar>& ref,
+                          const HybridFrames<Scalar>& f, const HybridWrenches<Scalar>& w, const Scalar* errors,
+                          Twist<Scalar>& twist) {
+  using hybrid_twist_detail::add_revolute_frame;
   using hybrid_twist_detail::columns;
   using L = HybridErrorLayout;
-  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX(), ey = Vec3<Scalar>::UnitY(), ez = Vec3<Scalar>::UnitZ();
+  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
   const Vec3<Scalar>& P = f.P;
-  const Vec3<Scalar> zero = Vec3<Scalar>::Zero();
 
-  // J_P (Eq. (5)) in dimensionless form, built in the LU's storage; b collects
-  // the right-hand side [ŝ_wa,iᵀ·(A_i Δη_i) + Δξ_i ; W_c·(A_4 Δη_4)].
-  SmallLu<Scalar, 6> lu;
-  auto JP = lu.storage();  // a Map of the LU's own storage
+  // Right-hand side [ŝ_wa,iᵀ·(A_i Δη_i) + Δξ_i ; W_c·(A_4 Δη_4)] (B_ξ of the UPS
+  // encoders is J_P⁻¹'s first three columns).
   Vec6<Scalar> b;
-  const Vec3<Scalar> c_ref_point = g.home.extension * ez;  // platform centre at the reference configuration
   for (int i = 0; i < 3; ++i) {
-    const Vec3<Scalar> A1 = g.base_joints.col(i);
-    const Vec3<Scalar> A6 = f.platform_joints.col(i);
-    // Reference frames of the chain (identify's constructor).
-    Vec3<Scalar> ur = c_ref_point + g.platform_joints.col(i) - A1;
-    ur.normalize();
-    Vec3<Scalar> t = ur.cross(ez);
-    if (t.norm() < Scalar(1e-6)) t = ex;  // a vertical leg: any horizontal axis
-    t.normalize();
-    // At the configuration.
-    const Vec3<Scalar> u = f.legs.col(i).normalized();
+    // The limb's frames (see the file comment): reference leg u_r and U axis t,
+    // and at the configuration the leg u, the second U axis n, t3 = n × u, the
+    // platform-fixed S axis s6 and the middle S axis z5.
+    const Vec3<Scalar>& ur = ref.leg[i];
+    const Vec3<Scalar>& t = ref.axis[i];
+    const Vec3<Scalar>& u = w.u[i];
     const Vec3<Scalar> n = u.cross(t).normalized();
     const Vec3<Scalar> u1 = t.cross(n);
     const Vec3<Scalar> t3 = n.cross(u);
     const Vec3<Scalar> s6 = f.Rp * ur;
     const Vec3<Scalar> z5 = s6.cross(t3).normalized();
     const Scalar* e = errors + L::ups(i);
-    Twist<Scalar> ti = Twist<Scalar>::Zero();
-    const Vec3<Scalar> r1 = A1 - P, r6 = A6 - P;
-    e += add_frame(ti, Mat3<Scalar>::Identity(), r1, 0, e);
-    e += add_frame(ti, columns<Scalar>(ur, t.cross(ur), t), r1, 1, e);
-    e += add_frame(ti, columns<Scalar>(t, -u1, n), r1, 1, e);
-    e += add_frame(ti, columns<Scalar>(n, -t3, u), r1, 2, e);
-    e += add_frame(ti, columns<Scalar>(u, t3.cross(u), t3), r6, 1, e);
-    e += add_frame(ti, columns<Scalar>(t3, z5.cross(t3), z5), r6, 1, e);
-    add_frame(ti, columns<Scalar>(z5.cross(s6), z5, s6), r6, 1, e);
-    // Actuation wrench of limb i: unit force along u through A6 (Eq. (3)).
-    const Vec3<Scalar> m = r6.cross(u);
-    JP.template block<1, 3>(i, 0) = u.transpose();
-    JP.template block<1, 3>(i, 3) = m.transpose();
-    b(i) = u.dot(ti.template head<3>()) + m.dot(ti.template tail<3>()) + errors[i];
+    // u·(R_f·Δp_f), frame by frame (36 entries: frame 0 six, frames 1–6 five,
+    // translations first); the terms left out are zero by construction
+    // (u ⊥ n and u ⊥ t3, so frame 3's Δx, Δy and frame 5's Δx drop out; frame
+    // 4's axes are u, t3×u, t3).
+    Scalar gi = u.dot(Vec3<Scalar>(e[0], e[1], e[2]));               // frame 0 (I, A1i)
+    gi += u.dot(ur) * e[6] + u.dot(t.cross(ur)) * e[7] + u.dot(t) * e[8];  // frame 1 [u_r, t×u_r, t]
+    gi += u.dot(t) * e[11] - u.dot(u1) * e[12];                      // frame 2 [t, −u', n]
+    /* frame 3 [n, −t3, u]: Δx, Δy ⊥ u */                            //
+    gi += e[21];                                                     // frame 4 [u, t3×u, t3]
+    gi += u.dot(z5.cross(t3)) * e[27] + u.dot(z5) * e[28];           // frame 5 [t3, z5×t3, z5]
+    gi += u.dot(z5.cross(s6)) * e[31] + u.dot(z5) * e[32] + u.dot(s6) * e[33];  // frame 6 [z5×s6, z5, s6]
+    b(i) = gi + errors[i];
   }
   {
-    // UP limb: constraint wrenches reciprocal to its U and P twists: forces
-    // along w2 = y1 and n1 = w2 × w through A0, the couple n3 = w2 × x0.
-    const Mat3<Scalar> F2 = columns<Scalar>(ex, -ex.cross(f.y1), f.y1);
-    const Vec3<Scalar> r0 = -P;
+    // UP limb (21 entries): frame 0 (I), frame 1 [z0, −y0, x0], frame 2
+    // [x0, −x0×y1, y1] (revolute), frame 3 Rp (prismatic: Δx, Δy, Δα, Δβ, Δγ).
     const Scalar* e = errors + L::up();
-    Twist<Scalar> tu = Twist<Scalar>::Zero();
-    e += add_frame(tu, Mat3<Scalar>::Identity(), r0, 0, e);
-    e += add_frame(tu, columns<Scalar>(ez, -ey, ex), r0, 1, e);
-    e += add_frame(tu, F2, r0, 1, e);
-    add_frame(tu, f.Rp, r0, 2, e);
-    const Vec3<Scalar> n1 = f.y1.cross(f.w), n3 = f.y1.cross(ex);
-    const Vec3<Scalar> m0 = r0.cross(f.y1), m1 = r0.cross(n1);
-    JP.template block<1, 3>(3, 0) = f.y1.transpose();
-    JP.template block<1, 3>(3, 3) = m0.transpose();
-    JP.template block<1, 3>(4, 0) = n1.transpose();
-    JP.template block<1, 3>(4, 3) = m1.transpose();
-    JP.template block<1, 3>(5, 0) = zero.transpose();
-    JP.template block<1, 3>(5, 3) = n3.transpose();
-    b(3) = f.y1.dot(tu.template head<3>()) + m0.dot(tu.template tail<3>());
-    b(4) = n1.dot(tu.template head<3>()) + m1.dot(tu.template tail<3>());
-    b(5) = n3.dot(tu.template tail<3>());
+    const Vec3<Scalar> x1y = ex.cross(f.y1);
+    const Vec3<Scalar> lin = Vec3<Scalar>(e[0], e[1], e[2]) + Vec3<Scalar>(e[8], -e[7], e[6]) +
+                             ex * e[11] - x1y * e[12] + f.y1 * e[13] + f.Rp.col(0) * e[16] + f.Rp.col(1) * e[17];
+    const Vec3<Scalar> ang = Vec3<Scalar>(e[3], e[4], e[5]) + Vec3<Scalar>(Scalar(0), -e[10], e[9]) + ex * e[14] -
+                             x1y * e[15] + f.Rp * Vec3<Scalar>(e[18], e[19], e[20]);
+    b(3) = f.y1.dot(lin);
+    b(4) = f.y1.cross(f.w).dot(lin);
+    b(5) = f.y1.cross(ex).dot(ang);
   }
-  // Solve J_P·$ = b in scaled unknowns (angles × L) so the singularity test is
-  // dimensionless, as in the kinematics.
-  const Scalar Lc = g.characteristic_length;
-  JP.template rightCols<3>() *= Scalar(1) / Lc;
-  if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return Status::Singular;
-  Twist<Scalar> out = lu.solve(b);
-  out.template tail<3>() *= Scalar(1) / Lc;
+  Twist<Scalar> out = w.lu.solve(b);
+  out.template tail<3>() *= Scalar(1) / g.characteristic_length;  // J_P was solved in scaled unknowns
 
   // Wrist in series (Eq. (6)): its structural errors (Eq.) and its
   // encoder offsets Δθ_j along the joint screws.
   {
-    const Vec3<Scalar> A44 = (f.extension - up_split) * f.w;
-    const Mat3<Scalar> W4 = columns<Scalar>(f.Rp * ey, -(f.Rp * ex), f.w);
-    const Mat3<Scalar> W5 = columns<Scalar>(f.w, -f.F4.col(1), f.F4.col(0));
-    const Mat3<Scalar> W6 = columns<Scalar>(f.F5.col(0), -f.F5.col(2), f.F5.col(1));
+    const Vec3<Scalar> A44 = (f.extension - ref.up_split) * f.w;
     const Scalar* e = errors + L::wrist();
-    e += add_frame(out, W4, Vec3<Scalar>(A44 - P), 1, e);
-    e += add_frame(out, W5, Vec3<Scalar>(f.Q - P), 1, e);
-    add_frame(out, W6, Vec3<Scalar>(f.P0 - P), 1, e);
+    add_revolute_frame(out, columns<Scalar>(f.Rp.col(1), -f.Rp.col(0), f.w), Vec3<Scalar>(A44 - P), e);
+    add_revolute_frame(out, columns<Scalar>(f.w, -f.F4.col(1), f.F4.col(0)), Vec3<Scalar>(f.Q - P), e + 5);
+    add_revolute_frame(out, columns<Scalar>(f.F5.col(0), -f.F5.col(2), f.F5.col(1)), Vec3<Scalar>(f.P0 - P), e + 10);
     const Vec3<Scalar> axes[3] = {f.w, f.F4.col(0), f.F5.col(1)};
     const Vec3<Scalar> through[3] = {A44, f.Q, f.P0};
     for (int j = 0; j < 3; ++j) {
@@ -247,6 +294,32 @@ Status hybrid_error_twist(const HybridGeometry<Scalar>& g, Scalar up_split, cons
   if (!all_finite(result)) return Status::InvalidInput;
   twist = result;
   return Status::Ok;
+}
+
+// The same, building J_P first (Singular if the configuration is).
+template <class Scalar>
+Status hybrid_error_twist(const HybridGeometry<Scalar>& g, Scalar up_split, const HybridFrames<Scalar>& f,
+                          const Scalar* errors, Twist<Scalar>& twist) {
+  HybridWrenches<Scalar> w;
+  const Status s = hybrid_wrenches(g, f, w);
+  if (s != Status::Ok) return s;
+  return hybrid_error_twist(g, hybrid_error_reference(g, up_split), f, w, errors, twist);
+}
+
+// Static joint load of a unit weight at P (`weight` in {R}) from the factorised
+// J_P, for the compliance effect: τ = J_fᵀ·(F, 0) (core/effects.hpp), with
+// J_f's UPS columns J_P⁻¹·e_i and its wrist columns the joint screws at P
+// (the same numbers as static_load_forward on hybrid_forward_jacobian).
+template <class Scalar>
+Vec6<Scalar> hybrid_static_load(const HybridGeometry<Scalar>& g, const HybridFrames<Scalar>& f,
+                                const HybridWrenches<Scalar>& w, const Vec3<Scalar>& weight) {
+  const Vec3<Scalar> F = g.workpiece_rotation.transpose() * weight;  // in {R0}
+  Vec6<Scalar> tau;
+  for (int i = 0; i < 3; ++i) tau(i) = F.dot(Vec3<Scalar>(w.lu.solve(Vec6<Scalar>::Unit(i)).template head<3>()));
+  tau(3) = F.dot(f.w.cross(f.P));  // joint 4's axis passes through A0
+  tau(4) = F.dot(f.F5.col(0).cross(Vec3<Scalar>(f.P - f.Q)));
+  tau(5) = F.dot(f.F5.col(1).cross(Vec3<Scalar>(f.P - f.P0)));
+  return tau;
 }
 
 }  // namespace kincal
