@@ -119,42 +119,15 @@ template <class Machine, class Registers, class Stream> class Controller {
         compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal) {
     counters_.table_failures =
         (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
-    Vec6<Scalar> initial = config.initial_command;
-    if (!config.has_initial_command && compensator_.home_command(initial) != CompensationStatus::Ok)
-      initial = config.initial_command;
-    state_ = compensator_.start(initial);
+    initial_ = config.initial_command;
+    has_initial_ = config.has_initial_command;
   }
 
-  // Writes and verifies the encoder offsets (see the file comment).
+  // Writes and verifies the encoder offsets (see the file comment) and sets
+  // the held output to the machine's initial command.
   const StartReport& start() {
-    const Vec6<Scalar> offsets = encoder_offsets(compensator_.table());
-    for (int ch = 0; ch < kEncoderChannels; ++ch) {
-      PortStatus st = scaling_.to_counts(ch, offsets(ch), report_.counts[ch]);
-      const std::int32_t want = report_.counts[ch];
-      int failed_attempts = 0;
-      if (st == PortStatus::Ok) {
-        for (int attempt = 0; attempt < register_attempts_; ++attempt) {
-          std::int32_t back = 0;
-          st = registers_.write_verified(ch, want, back);
-          if (st == PortStatus::Ok) break;
-          ++failed_attempts;
-        }
-      }
-      std::int32_t held = 0;
-      if (registers_.read(ch, held) == PortStatus::Ok) {
-        report_.counts[ch] = held;
-        drive_offset_(ch) = scaling_.to_joint(ch, held);
-      }
-      if (st != PortStatus::Ok) {
-        ++counters_.register_failures;
-        if (report_.registers == PortStatus::Ok) {
-          report_.registers = st;
-          report_.register_channel = ch;
-        }
-      } else {
-        counters_.register_retries += static_cast<std::uint32_t>(failed_attempts);
-      }
-    }
+    reset_state(initial_command());
+    write_offsets();
     started_ = true;
     return report_;
   }
@@ -289,6 +262,49 @@ template <class Machine, class Registers, class Stream> class Controller {
     q += drive_offset_;  // to the drive frame (see the file comment)
   }
 
+  // The held output and the backlash reference at the start of a stream.
+  KINCAL_PORT_NOINLINE void reset_state(const Vec6<Scalar>& initial) { state_ = compensator_.start(initial); }
+
+  KINCAL_PORT_NOINLINE void write_offsets() {
+    const Vec6<Scalar> offsets = encoder_offsets(compensator_.table());
+    for (int ch = 0; ch < kEncoderChannels; ++ch) {
+      PortStatus st = scaling_.to_counts(ch, offsets(ch), report_.counts[ch]);
+      const std::int32_t want = report_.counts[ch];
+      int failed_attempts = 0;
+      if (st == PortStatus::Ok) {
+        for (int attempt = 0; attempt < register_attempts_; ++attempt) {
+          std::int32_t back = 0;
+          st = registers_.write_verified(ch, want, back);
+          if (st == PortStatus::Ok) break;
+          ++failed_attempts;
+        }
+      }
+      std::int32_t held = 0;
+      if (registers_.read(ch, held) == PortStatus::Ok) {
+        report_.counts[ch] = held;
+        drive_offset_(ch) = scaling_.to_joint(ch, held);
+      }
+      if (st != PortStatus::Ok) {
+        ++counters_.register_failures;
+        if (report_.registers == PortStatus::Ok) {
+          report_.registers = st;
+          report_.register_channel = ch;
+        }
+      } else {
+        counters_.register_retries += static_cast<std::uint32_t>(failed_attempts);
+      }
+    }
+  }
+
+  // The held output until the first accepted point. Out of line (and run from
+  // start(), not the constructor): the compensation at the home pose then
+  // stacks on start()'s small frame, not on the constructor's.
+  KINCAL_PORT_NOINLINE Vec6<Scalar> initial_command() const {
+    Vec6<Scalar> q = initial_;
+    if (!has_initial_ && compensator_.home_command(q) != CompensationStatus::Ok) q = initial_;
+    return q;
+  }
+
   // Out of line: the rotation's temporaries get their own frame, which is
   // gone before the compensation runs (worst-case stack, docs/benchmarks.md).
   KINCAL_PORT_NOINLINE static void to_pose(const Vec6<Scalar>& xyz_rpy, Pose<Scalar>& pose) {
@@ -304,6 +320,8 @@ template <class Machine, class Registers, class Stream> class Controller {
   Compensator<Machine> compensator_;
   CompensatorState<Scalar> state_;
   Vec6<Scalar> drive_offset_ = Vec6<Scalar>::Zero();
+  Vec6<Scalar> initial_ = Vec6<Scalar>::Zero();
+  bool has_initial_ = false;
   JointCommand<Scalar> pending_;
   std::uint32_t last_sequence_ = 0;
   bool have_last_sequence_ = false, has_pending_ = false, started_ = false;
