@@ -30,6 +30,7 @@
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
+#include "kincal/identify/table_writer.hpp"
 #include "kincal/identify/version.hpp"
 #include "commands.hpp"
 
@@ -365,9 +366,10 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   return 0;
 }
 
-int not_implemented(const std::string& command, const std::string& issue) {
-  std::cerr << "kincal: " << command << ": not implemented yet (" << issue << ")\n";
-  return kExitUsage;
+// The firmware's parameter table as a constexpr header (identify/table_writer.hpp).
+int run_table(const std::string& model_path, const std::string& out_path) {
+  ki::write_calibration_table_header(model_path, out_path);
+  return 0;
 }
 
 int run(int argc, char** argv) {
@@ -434,11 +436,11 @@ int run(int argc, char** argv) {
   kincal_app::DiagnoseArgs diag;
   CLI::App* diagnose = kincal_app::add_diagnose_command(app, diag);
 
-  // Registered with their GUIDE options so scripts fail loudly and usefully.
-  std::string s1, s2;
-  CLI::App* table = app.add_subcommand("table", "generate a calibration table header (not implemented yet)");
-  table->add_option("--model", s1)->required();
-  table->add_option("--out", s2)->required();
+  std::string table_model, table_out;
+  CLI::App* table = app.add_subcommand(
+      "table", "write a model's calibration table as a constexpr C++ header for the firmware (docs/firmware.md)");
+  table->add_option("--model", table_model, "MODEL.json from kincal identify")->required();
+  table->add_option("--out", table_out, "header to write (e.g. calibration_table.hpp)")->required();
 
   if (argc > 1 && argv[1][0] != '-') {
     const std::string first = argv[1];
@@ -469,7 +471,7 @@ int run(int argc, char** argv) {
   if (*identify) return run_identify(ident);
   if (*diagnose) return kincal_app::run_diagnose(diag);
   if (*compensate) return run_compensate(comp_robot, comp_model, comp_poses, comp_out);
-  if (*table) return not_implemented("table", "issue #5: generated calibration tables for the firmware");
+  if (*table) return run_table(table_model, table_out);
   return kExitUsage;
 }
 

@@ -1,0 +1,251 @@
+#include "kincal/identify/table_writer.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "kincal/core/calibration_table.hpp"
+#include "kincal/core/compensation.hpp"
+#include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/version.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+// Named groups of the canonical value list, in the order for_each_value
+// visits them (core/calibration_table.hpp). Only labels for the reader: the
+// count of every group is checked against table_value_count below, so a
+// change of the layout in core fails loudly here instead of mislabelling.
+using Groups = std::vector<std::pair<std::string, int>>;
+
+void add_stewart_geometry(Groups& g, const std::string& p) {
+  for (const auto& [name, n] : Groups{{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"min_length", 6},
+                                      {"max_length", 6}, {"home_rotation", 9}, {"home_position", 3},
+                                      {"characteristic_length", 1}})
+    g.emplace_back(p + name, n);
+}
+
+void add_hybrid_geometry(Groups& g, const std::string& p) {
+  for (const auto& [name, n] :
+       Groups{{"base_joints", 9}, {"platform_joints", 9}, {"platform_to_wrist", 1}, {"wrist_link", 1},
+              {"tool_length", 1}, {"workpiece_rotation", 9}, {"workpiece_origin", 3}, {"tool_offset", 9},
+              {"joint_offset", 6}, {"min_joint", 6}, {"max_joint", 6}, {"min_extension", 1}, {"max_extension", 1},
+              {"home", 3}, {"characteristic_length", 1}})
+    g.emplace_back(p + name, n);
+}
+
+void add_effects_and_bounds(Groups& g) {
+  for (const auto& [name, n] :
+       Groups{{"effects.scale", 6}, {"effects.backlash", 6}, {"effects.compliance", 6}, {"effects.cyclic_sin", 6},
+              {"effects.cyclic_cos", 6}, {"effects.thermal", 1}, {"effects.screw_lead", 1},
+              {"effects.screw_joints", 1}, {"effects.load_direction", 3}, {"effects.thermal_origin", 3},
+              {"effects.reference_temperature", 1}, {"bounds.max_correction", 6}, {"bounds.min_joint", 6},
+              {"bounds.max_joint", 6}})
+    g.emplace_back(name, n);
+}
+
+template <class Machine> Groups groups() {
+  Groups g;
+  if constexpr (Machine::family == MachineFamily::Hybrid) {
+    add_hybrid_geometry(g, "machine.nominal.");
+    g.emplace_back("machine.up_split", 1);
+    g.emplace_back("machine.encoder_offsets", 6);
+    g.emplace_back("machine.source_errors", kHybridSourceErrorCount);
+  } else {
+    add_stewart_geometry(g, "machine.nominal.");
+    add_stewart_geometry(g, "machine.calibrated.");
+  }
+  add_effects_and_bounds(g);
+  int total = 0;
+  for (const auto& e : g) total += e.second;
+  if (total != static_cast<int>(table_value_count<Machine>()))
+    throw InputError("kincal table: the table layout of core/calibration_table.hpp changed (" +
+                     std::to_string(table_value_count<Machine>()) + " values, the writer knows " +
+                     std::to_string(total) + "); update identify/src/table_writer.cpp");
+  return g;
+}
+
+// 17 significant digits: the shortest width that round-trips every double
+// (a float converts to double exactly, so its value round-trips too).
+std::string number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  std::string s = buf;
+  // A literal that reads as an integer is still a double in the array; keep
+  // it visibly one.
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string hex32(std::uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%08Xu", static_cast<unsigned>(v));
+  return buf;
+}
+
+std::string family_name(MachineFamily f) { return f == MachineFamily::Hybrid ? "Hybrid" : "Stewart6Ups"; }
+
+// One table as a value array, a CRC constant and the constexpr table.
+template <class Machine>
+void emit_table(std::ostream& out, const CalibrationTable<Machine>& t, const std::string& name, const std::string& scalar,
+                const std::vector<std::string>& source_error_names) {
+  const std::size_t n = table_value_count<Machine>();
+  std::vector<double> values(n);
+  table_to_values(t, values.data());
+  const Groups g = groups<Machine>();
+  out << "inline constexpr double k" << name << "Values_" << scalar << "[" << n << "] = {\n";
+  std::size_t k = 0;
+  for (const auto& [label, count] : g) {
+    if (label == "machine.source_errors") {
+      out << "    // " << label << " (Δχ̂ of seed 000 Eq. (7), identify's HybridErrorModel order)\n";
+      for (int i = 0; i < count; ++i, ++k)
+        out << "    " << number(values[k]) << ",  // " << source_error_names[static_cast<std::size_t>(i)] << "\n";
+      continue;
+    }
+    out << "    // " << label << "\n    ";
+    for (int i = 0; i < count; ++i, ++k) out << number(values[k]) << (i + 1 < count ? ", " : ",\n");
+  }
+  out << "};\n";
+  out << "inline constexpr std::uint32_t k" << name << "Crc_" << scalar << " = " << hex32(t.crc) << ";\n";
+  out << "inline constexpr ::kincal::CalibrationTable<::kincal::" << family_name(Machine::family) << "Machine<"
+      << scalar << ">> k" << name << "Table_" << scalar << " =\n    ::kincal::table_from_values<::kincal::"
+      << family_name(Machine::family) << "Machine<" << scalar << ">>(k" << name << "Values_" << scalar << ", k" << name
+      << "Crc_" << scalar << ");\n";
+  out << "static_assert(::kincal::table_crc(k" << name << "Table_" << scalar << ") == k" << name << "Crc_" << scalar
+      << ",\n              \"" << name << " table (" << scalar
+      << "): CRC mismatch, the values were edited or corrupted; regenerate with kincal table\");\n";
+  out << "static_assert(::kincal::validate_table(k" << name << "Table_" << scalar
+      << ") == ::kincal::CompensationStatus::Ok,\n              \"" << name << " table (" << scalar
+      << "): fails validate_table (values, bounds)\");\n\n";
+}
+
+// The nominal machine's table: the geometry without identified errors, the
+// machine data of the effects (screw lead, weight direction, thermal origin,
+// T0) without effect values, default bounds.
+template <class Machine> CalibrationTable<Machine> nominal_of(const CalibrationTable<Machine>& calibrated) {
+  using S = typename Machine::Scalar;
+  EffectParameters<S> e = to_core(calibrated.effects);
+  e.scale.setZero();
+  e.backlash.setZero();
+  e.compliance.setZero();
+  e.cyclic_sin.setZero();
+  e.cyclic_cos.setZero();
+  e.thermal = S(0);
+  if constexpr (Machine::family == MachineFamily::Hybrid) {
+    return nominal_table(to_core(calibrated.machine.nominal), calibrated.machine.up_split, e);
+  } else {
+    return nominal_table(to_core(calibrated.machine.nominal), e);
+  }
+}
+
+// A string literal for the banner and the constants (quotes and backslashes escaped).
+std::string literal(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n' || c == '\r') continue;
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string comment_safe(std::string s) {
+  for (char& c : s)
+    if (c == '\n' || c == '\r') c = ' ';
+  for (std::size_t p; (p = s.find("*/")) != std::string::npos;) s.replace(p, 2, "* /");
+  return s;
+}
+
+template <class Machine>
+std::string header_for(const CalibrationModel& model, const CalibrationTable<Machine>& table,
+                       const std::string& model_name) {
+  using MachineF = std::conditional_t<Machine::family == MachineFamily::Hybrid, HybridMachine<float>, StewartMachine<float>>;
+  const CalibrationTable<Machine> nominal = nominal_of(table);
+  const CalibrationTable<MachineF> table_f = table_cast<float>(table);
+  const CalibrationTable<MachineF> nominal_f = table_cast<float>(nominal);
+  for (const CompensationStatus st : {validate_table(nominal), validate_table(table_f), validate_table(nominal_f)})
+    if (st != CompensationStatus::Ok)
+      throw InputError(model_name, 0, 0,
+                       std::string("the generated table fails its check (") + to_string(st) + ")");
+  std::vector<std::string> names;
+  if constexpr (Machine::family == MachineFamily::Hybrid) {
+    const HybridErrorModel em(model.nominal.hybrid());
+    for (const HybridErrorParameter& p : em.parameters()) names.push_back(p.name + " " + p.unit());
+  }
+  const std::string fam = family_name(Machine::family);
+  std::ostringstream out;
+  out << "// Generated from " << comment_safe(model_name) << " by kincal " << kVersion
+      << " (`kincal table`). Do not edit:\n"
+      << "// regenerate it (the static_asserts below reject an edited value).\n"
+      << "//\n"
+      << "// robot: " << comment_safe(model.nominal.name) << " (" << comment_safe(model.nominal.family())
+      << "), estimator: " << comment_safe(model.estimator) << ", data: " << comment_safe(model.data_file) << "\n"
+      << "// Table format version " << kCalibrationTableVersion
+      << " (core/calibration_table.hpp); values in its canonical order, 17 significant\n"
+      << "// digits (exact round trip), lengths in mm, angles in rad. The calibration table is what\n"
+      << "// `kincal compensate` runs on for this model; the nominal table is the firmware's fallback\n"
+      << "// when the calibration table fails its start-up check (docs/firmware.md).\n"
+      << "#pragma once\n\n"
+      << "#include <cstdint>\n\n"
+      << "#include \"kincal/core/calibration_table.hpp\"\n\n"
+      << "static_assert(::kincal::kCalibrationTableVersion == " << kCalibrationTableVersion
+      << ",\n              \"generated for calibration table format version " << kCalibrationTableVersion
+      << "; regenerate with this kincal\");\n\n"
+      << "namespace kincal::generated {\n\n"
+      << "inline constexpr const char* kModelFile = " << literal(model_name) << ";\n"
+      << "inline constexpr const char* kRobot = " << literal(model.nominal.name) << ";\n"
+      << "inline constexpr const char* kGenerator = " << literal(std::string("kincal ") + kVersion) << ";\n"
+      << "inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::" << fam << ";\n"
+      << "inline constexpr std::uint32_t kFormatVersion = " << kCalibrationTableVersion << ";\n"
+      << "template <class Scalar> using Machine = ::kincal::" << fam << "Machine<Scalar>;\n\n";
+  emit_table(out, table, "Calibration", "double", names);
+  emit_table(out, nominal, "Nominal", "double", names);
+  emit_table(out, table_f, "Calibration", "float", names);
+  emit_table(out, nominal_f, "Nominal", "float", names);
+  out << "// By scalar: calibration_table<double>() etc.\n"
+      << "template <class Scalar> struct Tables;\n"
+      << "template <> struct Tables<double> {\n"
+      << "  static constexpr const ::kincal::CalibrationTable<Machine<double>>& calibration() { return kCalibrationTable_double; }\n"
+      << "  static constexpr const ::kincal::CalibrationTable<Machine<double>>& nominal() { return kNominalTable_double; }\n"
+      << "};\n"
+      << "template <> struct Tables<float> {\n"
+      << "  static constexpr const ::kincal::CalibrationTable<Machine<float>>& calibration() { return kCalibrationTable_float; }\n"
+      << "  static constexpr const ::kincal::CalibrationTable<Machine<float>>& nominal() { return kNominalTable_float; }\n"
+      << "};\n\n"
+      << "}  // namespace kincal::generated\n";
+  return out.str();
+}
+
+}  // namespace
+
+std::string calibration_table_header(const CalibrationModel& model, const std::string& model_name) {
+  const AnyCalibrationTable t = calibration_table(model);
+  return std::visit([&](const auto& table) { return header_for(model, table, model_name); }, t);
+}
+
+void write_calibration_table_header(const std::string& model_path, const std::string& out_path) {
+  const std::string text = calibration_table_header(read_model_file(model_path), model_path);
+  {
+    std::ifstream old(out_path, std::ios::binary);
+    if (old) {
+      std::ostringstream current;
+      current << old.rdbuf();
+      if (current.str() == text) return;  // unchanged: keep the time stamp, nothing rebuilds
+    }
+  }
+  std::ofstream f(out_path, std::ios::binary);
+  if (!f) throw InputError(out_path, 0, 0, "cannot open for writing");
+  f << text;
+  f.flush();
+  if (!f) throw InputError(out_path, 0, 0, "write error");
+}
+
+}  // namespace kincal::identify
