@@ -588,3 +588,22 @@ TEST(coreCompensation, NoHeap) {
 }
 
 }  // namespace
+
+// The portable compensation check (portable/core_checks.hpp), which also runs
+// under qemu on the Cortex-M targets.
+namespace {
+void gtest_sink(const char* file, int line, const char* what) {
+  ADD_FAILURE_AT(file, line) << "core check failed: " << what;
+}
+template <class Scalar> void portable_compensation() {
+  kincal::test::Checker c(&gtest_sink);
+  kincal::test::check_compensation<Scalar>(c);
+  EXPECT_EQ(c.failures(), 0);
+  EXPECT_GE(c.checks(), 45);
+}
+}  // namespace
+
+TEST(coreCompensation, PortableCheck) {
+  portable_compensation<double>();
+  portable_compensation<float>();
+}

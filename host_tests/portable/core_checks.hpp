@@ -4,6 +4,7 @@
 // status per failure. Allocation-free and exception-free like core/ itself.
 #pragma once
 
+#include "kincal/core/compensation.hpp"
 #include "kincal/core/reference_machines.hpp"
 #include "portable/check.hpp"
 
@@ -329,6 +330,66 @@ template <class Scalar> void check_hybrid_statuses(Checker& c) {
   KINCAL_CHECK(c, out.p == Vec3<Scalar>(Scalar(-7), Scalar(-7), Scalar(-7)));
 }
 
+// --- compensation (core/compensation.hpp) -------------------------------------
+// The parameter table's CRC computed at run time on this target equals the
+// compile-time value (byte order, IEEE layout), and the hybrid's compensation
+// with encoder offsets: each command driven through the controller geometry's
+// FK reaches the requested pose; a NaN point and a corrupt table each give
+// their status and hold the output.
+struct CompensationCheckValues {
+  double v[192];
+};
+constexpr CompensationCheckValues compensation_check_values() {
+  CompensationCheckValues c{};
+  for (int k = 0; k < 192; ++k) c.v[k] = double(k % 7 - 3) * 0.125 + double(k) * 1e-3;
+  return c;
+}
+constexpr CompensationCheckValues kCompensationCheckValues = compensation_check_values();
+
+template <class Scalar> void check_compensation(Checker& c) {
+  using CS = CompensationStatus;
+  {
+    constexpr StewartCalibrationTable<Scalar> fixed =
+        table_from_values<StewartMachine<Scalar>>(kCompensationCheckValues.v, 0u);
+    constexpr std::uint32_t compile_time = table_crc(fixed);
+    static StewartCalibrationTable<Scalar> copy;  // static: 0.8–1.5 KiB off the stack
+    copy = fixed;
+    volatile Scalar touch = copy.bounds.max_joint[5];  // keep the run-time CRC a run-time one
+    copy.bounds.max_joint[5] = touch;
+    KINCAL_CHECK(c, table_crc(copy) == compile_time);
+  }
+  static HybridCalibrationTable<Scalar> table;
+  table = nominal_table(make_hybrid_seed000<Scalar>());
+  const Scalar xi[6] = {Scalar(0.3), Scalar(-0.25), Scalar(0.2), Scalar(5e-4), Scalar(-4e-4), Scalar(3e-4)};
+  for (int i = 0; i < 6; ++i) table.machine.encoder_offsets[i] = xi[i];
+  table = seal_table(table);
+  KINCAL_CHECK(c, validate_table(table) == CS::Ok);
+  const HybridCompensator<Scalar> comp(table);
+  HybridGeometry<Scalar> controller = to_core(table.machine.nominal);
+  for (int i = 0; i < 6; ++i) controller.joint_offset(i) += xi[i];
+  Vec6<Scalar> home, q;
+  KINCAL_CHECK(c, comp.home_command(home) == CS::Ok);
+  CompensatorState<Scalar> state = comp.start(home);
+  Random rng(5);
+  for (int k = 0; k < 20; ++k) {
+    const Pose<Scalar> pose = random_pose<Scalar>(rng, kHybridLo, kHybridHi);
+    if (!KINCAL_CHECK(c, comp.compensate(state, pose, q) == CS::Ok)) continue;
+    Pose<Scalar> reached;
+    if (!KINCAL_CHECK(c, hybrid_fk(controller, q, reached).status == Status::Ok)) continue;
+    const double scale = sizeof(Scalar) == 8 ? 20.0 : 25.0;
+    KINCAL_CHECK(c, poses_close(reached, pose, scale * RoundTripTolerance<Scalar>::position_mm,
+                                scale * RoundTripTolerance<Scalar>::angle_rad));
+  }
+  const Vec6<Scalar> held = state.command;
+  const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
+  KINCAL_CHECK(c, comp.compensate(state, Pose<Scalar>::from_xyz_rpy(nan, 0, 0, 0, 0, 0), q) == CS::InvalidInput);
+  KINCAL_CHECK(c, q == held && state.count(CS::InvalidInput) == 1u && state.count(CS::Ok) == 20u);
+  table.machine.source_errors[77] = Scalar(1e-3);  // not resealed: corrupt
+  const HybridCompensator<Scalar> corrupt(table);
+  KINCAL_CHECK(c, corrupt.status() == CS::TableCrc);
+  KINCAL_CHECK(c, corrupt.compensate(state, Pose<Scalar>(), q) == CS::TableCrc && q == held);
+}
+
 // Everything for one scalar; `round_trips` poses per machine.
 template <class Scalar> void run_core_checks(Checker& c, int round_trips) {
   check_pose_math<Scalar>(c);
@@ -339,6 +400,7 @@ template <class Scalar> void run_core_checks(Checker& c, int round_trips) {
   check_hybrid_round_trip<Scalar>(c, round_trips);
   check_hybrid_jacobian<Scalar>(c);
   check_hybrid_statuses<Scalar>(c);
+  check_compensation<Scalar>(c);
 }
 
 }  // namespace kincal::test

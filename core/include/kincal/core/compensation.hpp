@@ -41,6 +41,12 @@
 #include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/core/stewart.hpp"
 
+#if defined(__GNUC__)
+#define KINCAL_NOINLINE __attribute__((noinline))
+#else
+#define KINCAL_NOINLINE
+#endif
+
 namespace kincal {
 
 // One NC point.
@@ -258,20 +264,37 @@ template <class Machine> class Compensator {
     return CS::Ok;
   }
 
-  // Steps 2–4: q_nom, the static load (if compliance is present) and q*.
+  // Steps 2–4: q_nom, the static load (if compliance is present) and q*. The
+  // work before the IK is a separate, non-inlined call so that its frames,
+  // wrenches and Jacobians are off the stack when the IK runs: the
+  // controller's worst-case stack is the deeper of the two, not their sum.
   CompensationStatus geometry(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                               Vec6<Scalar>& ideal, Vec6<Scalar>& load) const {
+    Pose<Scalar> target;
+    const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
+    if (st != CompensationStatus::Ok) return st;
+    if constexpr (family == MachineFamily::Stewart6Ups) {
+      return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));  // seed 001
+    } else {
+      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));  // seed 000 Fig. 4: ideal IK + ξ̂
+    }
+  }
+
+  // At the nominal configuration of `pose`: q_nom, the singularity test, the
+  // static load; then the pose handed to the IK (thermal pre-scaling, and for
+  // the hybrid the predicted error twist removed, seed 000 Eq. (16)).
+  KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
+                                             Vec6<Scalar>& load, Pose<Scalar>& target) const {
     using CS = CompensationStatus;
     if constexpr (family == MachineFamily::Stewart6Ups) {
       // The nominal IK with its Jacobian: the singularity test of the NC point,
       // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
       Mat6<Scalar> J;
-      Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
+      const Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
-      const Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
-      s = stewart_ik(model_.calibrated, target, ideal);  // seed 001: IK of the calibrated geometry
-      return to_compensation_status(s);
+      target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      return CS::Ok;
     } else {
       HybridFrames<Scalar> f;
       Vec3<Scalar> angles;
@@ -286,7 +309,7 @@ template <class Machine> class Compensator {
       s = hybrid_wrenches(model_.nominal, f, w);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
-      Pose<Scalar> target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
       if (model_.structural) {
         // seed 000 Eq. (16): the predicted error twist at the nominal
         // configuration, removed from the requested pose before the ideal IK.
@@ -295,8 +318,7 @@ template <class Machine> class Compensator {
         if (s != Status::Ok) return to_compensation_status(s);
         target = apply_twist(target, Twist<Scalar>(-t));
       }
-      s = hybrid_ik(model_.controller, target, ideal);
-      return to_compensation_status(s);
+      return CS::Ok;
     }
   }
 

@@ -39,6 +39,12 @@
 #include "kincal/core/small_lu.hpp"
 #include "kincal/core/status.hpp"
 
+#if defined(__GNUC__)
+#define KINCAL_TWIST_NOINLINE __attribute__((noinline))
+#else
+#define KINCAL_TWIST_NOINLINE
+#endif
+
 namespace kincal {
 
 // Layout of Δχ (identify's HybridErrorModel): 6 encoder offsets, then the Δη of
@@ -59,14 +65,14 @@ static_assert(HybridErrorLayout::size() == 150, "seed 000 Eq. (7): 150 source er
 // pose in {R}: hybrid_ik's closed form (trig-free, the same arithmetic) but
 // without joint limits, so the error twist can be evaluated wherever the
 // geometry closes. `wrist_angles` gets the physical wrist angles θ4..θ6.
-// Writes the outputs only on Ok; InvalidInput, Unreachable, Singular as
-// hybrid_ik.
+// InvalidInput, Unreachable, Singular as hybrid_ik. A building block: `f` is
+// the caller's scratch and is filled as the computation goes (meaningful
+// only on Ok) — no second copy of the frames on the controller's stack.
 template <class Scalar>
-Status hybrid_frames_at_pose(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, HybridFrames<Scalar>& out,
+Status hybrid_frames_at_pose(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, HybridFrames<Scalar>& f,
                              Vec3<Scalar>& wrist_angles) {
   if (!tool.finite()) return Status::InvalidInput;
   const Mat3<Scalar> wR0t = g.workpiece_rotation.transpose();
-  HybridFrames<Scalar> f;
   f.F6 = wR0t * tool.R * g.tool_offset.transpose();
   f.P = g.workpiece_origin + wR0t * tool.p;
   const Vec3<Scalar> a6 = f.F6.col(1);
@@ -99,28 +105,35 @@ Status hybrid_frames_at_pose(const HybridGeometry<Scalar>& g, const Pose<Scalar>
   wrist_angles(0) = std::atan2(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)));
   wrist_angles(1) = std::atan2(-u.dot(f.F4.col(1)), u.dot(f.w));
   wrist_angles(2) = std::atan2(x5.dot(f.F6.col(2)), x5.dot(f.F6.col(0)));
-  out = f;
   return Status::Ok;
 }
 
 namespace hybrid_twist_detail {
 
-template <class Scalar> Mat3<Scalar> columns(const Vec3<Scalar>& a, const Vec3<Scalar>& b, const Vec3<Scalar>& c) {
-  Mat3<Scalar> m;
-  m.col(0) = a;
-  m.col(1) = b;
-  m.col(2) = c;
-  return m;
+// Adds Ad(R, A − P)·Δη of one revolute joint error frame (seed 000 Eq. (A-1):
+// Δx, Δy, Δz, Δα, Δβ; Δγ is the joint's own) to `t`, R = [x, −y_neg, z] (the
+// wrist frames all have a negated axis as their y column), r = A − P. Plain
+// vector arithmetic, no 3×3 temporaries: this runs on the controller's stack.
+template <class Scalar>
+void add_wrist_frame(Twist<Scalar>& t, const Vec3<Scalar>& x, const Vec3<Scalar>& y_neg, const Vec3<Scalar>& z,
+                     const Vec3<Scalar>& r, const Scalar* e) {
+  Vec3<Scalar> w = x * e[3];
+  w -= y_neg * e[4];
+  Vec3<Scalar> v = r.cross(w);
+  v += x * e[0];
+  v -= y_neg * e[1];
+  v += z * e[2];
+  t.template head<3>() += v;
+  t.template tail<3>() += w;
 }
 
-// Adds Ad(R, A − P)·Δη of one error frame (seed 000 Eq. (A-1)) to `t`; kind 1:
-// revolute joint frame (Δx, Δy, Δz, Δα, Δβ; Δγ is the joint's own).
+// Adds the twist (a × (P − p), a)·θ of a revolute joint screw (axis a through p).
 template <class Scalar>
-void add_revolute_frame(Twist<Scalar>& t, const NonDeducedT<Mat3<Scalar>>& R, const NonDeducedT<Vec3<Scalar>>& r,
-                        const Scalar* e) {
-  const Vec3<Scalar> w = R.col(0) * e[3] + R.col(1) * e[4];
-  t.template head<3>() += R.col(0) * e[0] + R.col(1) * e[1] + R.col(2) * e[2] + r.cross(w);
-  t.template tail<3>() += w;
+void add_joint_screw(Twist<Scalar>& t, const Vec3<Scalar>& a, const Vec3<Scalar>& p, const Vec3<Scalar>& P,
+                     Scalar theta) {
+  const Vec3<Scalar> d = P - p;
+  t.template head<3>() += a.cross(d) * theta;
+  t.template tail<3>() += a * theta;
 }
 
 }  // namespace hybrid_twist_detail
@@ -216,76 +229,94 @@ Status hybrid_wrenches(const HybridGeometry<Scalar>& g, const HybridFrames<Scala
 // the rotation errors about the leg line vanish). Likewise the UP limb's
 // frames all sit at A0, where its two constraint forces pass: they see Σ R_f·Δp_f,
 // the constraint couple sees Σ R_f·Δθ_f.
+namespace hybrid_twist_detail {
+
+// The pieces below are separate, non-inlined functions on purpose: each keeps
+// its own few vectors, so the controller's worst-case stack is the largest
+// piece, not the sum of all their temporaries (Cortex-M bar: 4 KiB).
+
+// ŝ_wa,iᵀ·(A_i·Δη_i) of UPS limb i = Σ_f u·(R_f·Δp_f) (see hybrid_error_twist).
+// ur, t: the limb's reference leg and U axis; u: its leg at the configuration;
+// e: its 36 entries of Δχ (frame 0 six, frames 1–6 five, translations first).
+template <class Scalar>
+KINCAL_TWIST_NOINLINE Scalar ups_leg_error(const Vec3<Scalar>& ur, const Vec3<Scalar>& t, const Vec3<Scalar>& u,
+                                           const Mat3<Scalar>& Rp, const Scalar* e) {
+  // Frames at the configuration: the second U axis n, u' = t × n, t3 = n × u,
+  // the platform-fixed S axis s6 and the middle S axis z5 (file comment).
+  const Vec3<Scalar> n = u.cross(t).normalized();
+  const Vec3<Scalar> t3 = n.cross(u);
+  const Vec3<Scalar> s6 = Rp * ur;
+  const Vec3<Scalar> z5 = s6.cross(t3).normalized();
+  // The terms left out are zero by construction: u ⊥ n and u ⊥ t3, so frame
+  // 3's Δx, Δy and frame 5's Δx drop out; frame 4's axes are u, t3×u, t3.
+  Scalar g = u.dot(Vec3<Scalar>(e[0], e[1], e[2]));                       // frame 0 (I, A1i)
+  g += u.dot(ur) * e[6] + u.dot(t.cross(ur)) * e[7] + u.dot(t) * e[8];     // frame 1 [u_r, t×u_r, t]
+  g += u.dot(t) * e[11] - u.dot(t.cross(n)) * e[12];                       // frame 2 [t, −u', n]
+  g += e[21];                                                              // frame 4 [u, t3×u, t3]
+  g += u.dot(z5.cross(t3)) * e[27] + u.dot(z5) * e[28];                    // frame 5 [t3, z5×t3, z5]
+  g += u.dot(z5.cross(s6)) * e[31] + u.dot(z5) * e[32] + u.dot(s6) * e[33];  // frame 6 [z5×s6, z5, s6]
+  return g;
+}
+
+// W_c·(A_4·Δη_4) of the UP limb (21 entries): frame 0 (I), frame 1
+// [z0, −y0, x0], frame 2 [x0, −x0×y1, y1] (revolute), frame 3 Rp (prismatic:
+// Δx, Δy, Δα, Δβ, Δγ), all at A0.
+template <class Scalar>
+KINCAL_TWIST_NOINLINE void up_limb_error(const HybridFrames<Scalar>& f, const Scalar* e, Scalar* b) {
+  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
+  const Vec3<Scalar> x1y = ex.cross(f.y1);
+  // One term per statement: long Eigen sums keep every operand on the stack.
+  Vec3<Scalar> lin(e[0] + e[8], e[1] - e[7], e[2] + e[6]);
+  lin += ex * e[11];
+  lin -= x1y * e[12];
+  lin += f.y1 * e[13];
+  lin += f.Rp.col(0) * e[16];
+  lin += f.Rp.col(1) * e[17];
+  Vec3<Scalar> ang(e[3], e[4] - e[10], e[5] + e[9]);
+  ang += ex * e[14];
+  ang -= x1y * e[15];
+  ang += f.Rp.col(0) * e[18];
+  ang += f.Rp.col(1) * e[19];
+  ang += f.Rp.col(2) * e[20];
+  b[0] = f.y1.dot(lin);
+  b[1] = f.y1.cross(f.w).dot(lin);
+  b[2] = f.y1.cross(ex).dot(ang);
+}
+
+// The wrist in series (Eq. (6)): its structural errors (Eq. (A-5), 15
+// entries) and its encoder offsets Δθ_j along the joint screws, added to `t`
+// (in {R0}, at P).
+template <class Scalar>
+KINCAL_TWIST_NOINLINE void add_wrist_errors(Twist<Scalar>& t, const HybridFrames<Scalar>& f, Scalar up_split,
+                                            const Scalar* e, const Scalar* encoders) {
+  const Vec3<Scalar>& P = f.P;
+  const Vec3<Scalar> A44 = (f.extension - up_split) * f.w;
+  add_wrist_frame<Scalar>(t, f.Rp.col(1), f.Rp.col(0), f.w, A44 - P, e);                // [Rp·y0, −Rp·x0, w]
+  add_wrist_frame<Scalar>(t, f.w, f.F4.col(1), f.F4.col(0), f.Q - P, e + 5);            // [w, −F4·y, F4·x]
+  add_wrist_frame<Scalar>(t, f.F5.col(0), f.F5.col(2), f.F5.col(1), f.P0 - P, e + 10);  // [F5·x, −F5·z, F5·y]
+  // Joint screws (a × (P − p), a): joint 4 about w through A44, 5 about F4·x
+  // through Q, 6 about F5·y through P0.
+  add_joint_screw<Scalar>(t, f.w, A44, P, encoders[0]);
+  add_joint_screw<Scalar>(t, f.F4.col(0), f.Q, P, encoders[1]);
+  add_joint_screw<Scalar>(t, f.F5.col(1), f.P0, P, encoders[2]);
+}
+
+}  // namespace hybrid_twist_detail
+
 template <class Scalar>
 Status hybrid_error_twist(const HybridGeometry<Scalar>& g, const HybridErrorReference<Scalar>& ref,
                           const HybridFrames<Scalar>& f, const HybridWrenches<Scalar>& w, const Scalar* errors,
                           Twist<Scalar>& twist) {
-  using hybrid_twist_detail::add_revolute_frame;
-  using hybrid_twist_detail::columns;
   using L = HybridErrorLayout;
-  const Vec3<Scalar> ex = Vec3<Scalar>::UnitX();
-  const Vec3<Scalar>& P = f.P;
-
   // Right-hand side [ŝ_wa,iᵀ·(A_i Δη_i) + Δξ_i ; W_c·(A_4 Δη_4)] (B_ξ of the UPS
   // encoders is J_P⁻¹'s first three columns).
   Vec6<Scalar> b;
-  for (int i = 0; i < 3; ++i) {
-    // The limb's frames (see the file comment): reference leg u_r and U axis t,
-    // and at the configuration the leg u, the second U axis n, t3 = n × u, the
-    // platform-fixed S axis s6 and the middle S axis z5.
-    const Vec3<Scalar>& ur = ref.leg[i];
-    const Vec3<Scalar>& t = ref.axis[i];
-    const Vec3<Scalar>& u = w.u[i];
-    const Vec3<Scalar> n = u.cross(t).normalized();
-    const Vec3<Scalar> u1 = t.cross(n);
-    const Vec3<Scalar> t3 = n.cross(u);
-    const Vec3<Scalar> s6 = f.Rp * ur;
-    const Vec3<Scalar> z5 = s6.cross(t3).normalized();
-    const Scalar* e = errors + L::ups(i);
-    // u·(R_f·Δp_f), frame by frame (36 entries: frame 0 six, frames 1–6 five,
-    // translations first); the terms left out are zero by construction
-    // (u ⊥ n and u ⊥ t3, so frame 3's Δx, Δy and frame 5's Δx drop out; frame
-    // 4's axes are u, t3×u, t3).
-    Scalar gi = u.dot(Vec3<Scalar>(e[0], e[1], e[2]));               // frame 0 (I, A1i)
-    gi += u.dot(ur) * e[6] + u.dot(t.cross(ur)) * e[7] + u.dot(t) * e[8];  // frame 1 [u_r, t×u_r, t]
-    gi += u.dot(t) * e[11] - u.dot(u1) * e[12];                      // frame 2 [t, −u', n]
-    /* frame 3 [n, −t3, u]: Δx, Δy ⊥ u */                            //
-    gi += e[21];                                                     // frame 4 [u, t3×u, t3]
-    gi += u.dot(z5.cross(t3)) * e[27] + u.dot(z5) * e[28];           // frame 5 [t3, z5×t3, z5]
-    gi += u.dot(z5.cross(s6)) * e[31] + u.dot(z5) * e[32] + u.dot(s6) * e[33];  // frame 6 [z5×s6, z5, s6]
-    b(i) = gi + errors[i];
-  }
-  {
-    // UP limb (21 entries): frame 0 (I), frame 1 [z0, −y0, x0], frame 2
-    // [x0, −x0×y1, y1] (revolute), frame 3 Rp (prismatic: Δx, Δy, Δα, Δβ, Δγ).
-    const Scalar* e = errors + L::up();
-    const Vec3<Scalar> x1y = ex.cross(f.y1);
-    const Vec3<Scalar> lin = Vec3<Scalar>(e[0], e[1], e[2]) + Vec3<Scalar>(e[8], -e[7], e[6]) +
-                             ex * e[11] - x1y * e[12] + f.y1 * e[13] + f.Rp.col(0) * e[16] + f.Rp.col(1) * e[17];
-    const Vec3<Scalar> ang = Vec3<Scalar>(e[3], e[4], e[5]) + Vec3<Scalar>(Scalar(0), -e[10], e[9]) + ex * e[14] -
-                             x1y * e[15] + f.Rp * Vec3<Scalar>(e[18], e[19], e[20]);
-    b(3) = f.y1.dot(lin);
-    b(4) = f.y1.cross(f.w).dot(lin);
-    b(5) = f.y1.cross(ex).dot(ang);
-  }
+  for (int i = 0; i < 3; ++i)
+    b(i) = hybrid_twist_detail::ups_leg_error(ref.leg[i], ref.axis[i], w.u[i], f.Rp, errors + L::ups(i)) + errors[i];
+  hybrid_twist_detail::up_limb_error(f, errors + L::up(), b.data() + 3);
   Twist<Scalar> out = w.lu.solve(b);
   out.template tail<3>() *= Scalar(1) / g.characteristic_length;  // J_P was solved in scaled unknowns
-
-  // Wrist in series (Eq. (6)): its structural errors (Eq. (A-5)) and its
-  // encoder offsets Δθ_j along the joint screws.
-  {
-    const Vec3<Scalar> A44 = (f.extension - ref.up_split) * f.w;
-    const Scalar* e = errors + L::wrist();
-    add_revolute_frame(out, columns<Scalar>(f.Rp.col(1), -f.Rp.col(0), f.w), Vec3<Scalar>(A44 - P), e);
-    add_revolute_frame(out, columns<Scalar>(f.w, -f.F4.col(1), f.F4.col(0)), Vec3<Scalar>(f.Q - P), e + 5);
-    add_revolute_frame(out, columns<Scalar>(f.F5.col(0), -f.F5.col(2), f.F5.col(1)), Vec3<Scalar>(f.P0 - P), e + 10);
-    const Vec3<Scalar> axes[3] = {f.w, f.F4.col(0), f.F5.col(1)};
-    const Vec3<Scalar> through[3] = {A44, f.Q, f.P0};
-    for (int j = 0; j < 3; ++j) {
-      out.template head<3>() += errors[3 + j] * axes[j].cross(Vec3<Scalar>(P - through[j]));
-      out.template tail<3>() += errors[3 + j] * axes[j];
-    }
-  }
+  hybrid_twist_detail::add_wrist_errors(out, f, ref.up_split, errors + L::wrist(), errors + 3);
   // Eq. (8): into the workpiece frame {R}.
   const Mat3<Scalar>& Rw = g.workpiece_rotation;
   Twist<Scalar> result;
