@@ -47,6 +47,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <new>
 
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/compensation.hpp"
@@ -126,7 +127,7 @@ template <class Machine, class Registers, class Stream> class Controller {
   // Writes and verifies the encoder offsets (see the file comment) and sets
   // the held output to the machine's initial command.
   const StartReport& start() {
-    reset_state(initial_command());
+    reset_state();
     write_offsets();
     started_ = true;
     return report_;
@@ -148,8 +149,7 @@ template <class Machine, class Registers, class Stream> class Controller {
       has_pending_ = false;
       return Cycle::Command;
     }
-    NcInput<Scalar> in;
-    const PortStatus r = stream_.receive(in);
+    const PortStatus r = stream_.receive(input_);
     switch (r) {
       case PortStatus::Ok:
       case PortStatus::Malformed: break;
@@ -157,9 +157,11 @@ template <class Machine, class Registers, class Stream> class Controller {
       case PortStatus::EndOfStream: return Cycle::End;
       default: ++counters_.io_errors; return Cycle::Error;
     }
-    // The command is built in pending_ (no copy on the controller's stack)
-    // and stays there if the drives refuse it.
-    answer(in, r == PortStatus::Malformed, pending_);
+    // The point, the compensator's input and the command live in the
+    // controller object, not on the stack: the stack under the compensation
+    // is the firmware's scarcest resource (docs/benchmarks.md). The command
+    // stays in pending_ if the drives refuse it.
+    answer(r == PortStatus::Malformed);
     const PortStatus s = stream_.send(pending_);
     if (s == PortStatus::Overrun) {
       ++counters_.output_overruns;
@@ -215,9 +217,13 @@ template <class Machine, class Registers, class Stream> class Controller {
     return r;
   }
 
-  void answer(const NcInput<Scalar>& in, bool malformed, JointCommand<Scalar>& cmd) {
-    cmd = JointCommand<Scalar>();
+  void answer(bool malformed) {
+    const NcInput<Scalar>& in = input_;
+    JointCommand<Scalar>& cmd = pending_;
     cmd.sequence = in.sequence;
+    cmd.status = CompensationStatus::Ok;
+    cmd.port = PortStatus::Ok;
+    cmd.flags = 0;
     ++counters_.points;
     // Sequence numbers: each point should follow the previous one.
     if (have_last_sequence_ && in.sequence != last_sequence_ + 1u) {
@@ -240,17 +246,17 @@ template <class Machine, class Registers, class Stream> class Controller {
       q = state_.command;
       cmd.flags |= kCommandHeld;
     } else {
-      kincal::NcPoint<Scalar> p;
+      kincal::NcPoint<Scalar>& p = point_;
+      p.direction = nullptr;  // backlash directions from the command sequence
+      p.temperature = in.temperature;
+      p.has_temperature = in.has_temperature;
       if (malformed || !in.valid) {
         // An unparsable record is an invalid input like a NaN: the
         // compensator counts it and holds.
         ++counters_.malformed;
-        const Scalar nan = std::numeric_limits<Scalar>::quiet_NaN();
-        p.pose.p = Vec3<Scalar>::Constant(nan);
+        p.pose.p.setConstant(std::numeric_limits<Scalar>::quiet_NaN());
       } else {
         to_pose(in.pose, p.pose);
-        p.temperature = in.temperature;
-        p.has_temperature = in.has_temperature;
       }
       cmd.status = compensator_.compensate(state_, p, q);
       if (cmd.status != CompensationStatus::Ok) cmd.flags |= kCommandHeld;
@@ -262,8 +268,26 @@ template <class Machine, class Registers, class Stream> class Controller {
     q += drive_offset_;  // to the drive frame (see the file comment)
   }
 
-  // The held output and the backlash reference at the start of a stream.
-  KINCAL_PORT_NOINLINE void reset_state(const Vec6<Scalar>& initial) { state_ = compensator_.start(initial); }
+  // The held output and the backlash reference at the start of a stream:
+  // the configured initial command, or the compensated command at the home
+  // pose (what `kincal compensate` starts from). The home pose is compensated
+  // like any point, from a fresh state (as Compensator::home_command does),
+  // through the members rather than a scratch state on the stack.
+  KINCAL_PORT_NOINLINE void reset_state() {
+    Vec6<Scalar>& q = pending_.q;  // scratch until the first point
+    q = initial_;
+    if (!has_initial_) {
+      new (&state_) CompensatorState<Scalar>();
+      home_point();
+      if (compensator_.compensate(state_, point_, q) != CompensationStatus::Ok) q = initial_;
+    }
+    restart(q);
+  }
+  KINCAL_PORT_NOINLINE void home_point() {
+    new (&point_) kincal::NcPoint<Scalar>();
+    point_.pose = compensator_.home_pose();
+  }
+  KINCAL_PORT_NOINLINE void restart(const Vec6<Scalar>& initial) { state_ = compensator_.start(initial); }
 
   KINCAL_PORT_NOINLINE void write_offsets() {
     const Vec6<Scalar> offsets = encoder_offsets(compensator_.table());
@@ -296,15 +320,6 @@ template <class Machine, class Registers, class Stream> class Controller {
     }
   }
 
-  // The held output until the first accepted point. Out of line (and run from
-  // start(), not the constructor): the compensation at the home pose then
-  // stacks on start()'s small frame, not on the constructor's.
-  KINCAL_PORT_NOINLINE Vec6<Scalar> initial_command() const {
-    Vec6<Scalar> q = initial_;
-    if (!has_initial_ && compensator_.home_command(q) != CompensationStatus::Ok) q = initial_;
-    return q;
-  }
-
   // Out of line: the rotation's temporaries get their own frame, which is
   // gone before the compensation runs (worst-case stack, docs/benchmarks.md).
   KINCAL_PORT_NOINLINE static void to_pose(const Vec6<Scalar>& xyz_rpy, Pose<Scalar>& pose) {
@@ -323,6 +338,8 @@ template <class Machine, class Registers, class Stream> class Controller {
   Vec6<Scalar> initial_ = Vec6<Scalar>::Zero();
   bool has_initial_ = false;
   JointCommand<Scalar> pending_;
+  NcInput<Scalar> input_;
+  kincal::NcPoint<Scalar> point_;
   std::uint32_t last_sequence_ = 0;
   bool have_last_sequence_ = false, has_pending_ = false, started_ = false;
 };
