@@ -349,20 +349,21 @@ constexpr CompensationCheckValues kCompensationCheckValues = compensation_check_
 template <class Scalar> void check_compensation(Checker& c) {
   using CS = CompensationStatus;
   {
-    constexpr StewartCalibrationTable<Scalar> fixed =
+    static constexpr StewartCalibrationTable<Scalar> fixed =
         table_from_values<StewartMachine<Scalar>>(kCompensationCheckValues.v, 0u);
     constexpr std::uint32_t compile_time = table_crc(fixed);
-    static StewartCalibrationTable<Scalar> copy;  // static: 0.8–1.5 KiB off the stack
+    static StewartCalibrationTable<Scalar> copy;  // static: tables stay off the stack
     copy = fixed;
     volatile Scalar touch = copy.bounds.max_joint[5];  // keep the run-time CRC a run-time one
     copy.bounds.max_joint[5] = touch;
     KINCAL_CHECK(c, table_crc(copy) == compile_time);
   }
-  static HybridCalibrationTable<Scalar> table;
-  table = nominal_table(make_hybrid_seed000<Scalar>());
+  // Static and built in place: a table is 1.1 (float) to 2.3 KiB (double).
+  static HybridCalibrationTable<Scalar> table = nominal_table(make_hybrid_seed000<Scalar>());
+  table.machine.source_errors[77] = Scalar(0);
   const Scalar xi[6] = {Scalar(0.3), Scalar(-0.25), Scalar(0.2), Scalar(5e-4), Scalar(-4e-4), Scalar(3e-4)};
   for (int i = 0; i < 6; ++i) table.machine.encoder_offsets[i] = xi[i];
-  table = seal_table(table);
+  seal(table);
   KINCAL_CHECK(c, validate_table(table) == CS::Ok);
   const HybridCompensator<Scalar> comp(table);
   HybridGeometry<Scalar> controller = to_core(table.machine.nominal);
@@ -385,9 +386,10 @@ template <class Scalar> void check_compensation(Checker& c) {
   KINCAL_CHECK(c, comp.compensate(state, Pose<Scalar>::from_xyz_rpy(nan, 0, 0, 0, 0, 0), q) == CS::InvalidInput);
   KINCAL_CHECK(c, q == held && state.count(CS::InvalidInput) == 1u && state.count(CS::Ok) == 20u);
   table.machine.source_errors[77] = Scalar(1e-3);  // not resealed: corrupt
-  const HybridCompensator<Scalar> corrupt(table);
-  KINCAL_CHECK(c, corrupt.status() == CS::TableCrc);
-  KINCAL_CHECK(c, corrupt.compensate(state, Pose<Scalar>(), q) == CS::TableCrc && q == held);
+  KINCAL_CHECK(c, validate_table(table) == CS::TableCrc);
+  // (A compensator on it reports TableCrc and holds: core_compensation_test.)
+  table.machine.source_errors[77] = Scalar(0);
+  seal(table);
 }
 
 // Everything for one scalar; `round_trips` poses per machine.

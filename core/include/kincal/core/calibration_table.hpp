@@ -289,11 +289,17 @@ template <class Machine> constexpr std::uint32_t table_crc(const CalibrationTabl
   return crc.value();
 }
 
-// Sets version, family and crc of a filled table (generators, tests).
-template <class Machine> constexpr CalibrationTable<Machine> seal_table(CalibrationTable<Machine> t) {
+// Sets version, family and crc of a filled table (generators, tests), in
+// place: no copy of the table on a controller's stack.
+template <class Machine> constexpr void seal(CalibrationTable<Machine>& t) {
   t.version = kCalibrationTableVersion;
   t.family = Machine::family;
   t.crc = table_crc(t);
+}
+
+// The same on a copy (constexpr expressions, host code).
+template <class Machine> constexpr CalibrationTable<Machine> seal_table(CalibrationTable<Machine> t) {
+  seal(t);
   return t;
 }
 
@@ -333,7 +339,8 @@ template <class Other, class Machine> auto table_cast(const CalibrationTable<Mac
   double values[table_value_count<Machine>()] = {};
   table_to_values(t, values);
   CalibrationTable<OtherMachine> out = table_from_values<OtherMachine>(values, 0u);
-  return seal_table(out);
+  seal(out);
+  return out;
 }
 
 // ---- validation ----------------------------------------------------------------

@@ -361,7 +361,9 @@ template <class Scalar> TableBounds<Scalar> default_bounds(const HybridGeometry<
 }
 
 // The nominal model as a (sealed) table: the firmware's fallback when its
-// calibration table fails validate_table. `effects` carries the machine data
+// calibration table fails validate_table. Built in the return slot (NRVO) and
+// sealed in place; still ~1–2 KiB of geometry temporaries in double, so a
+// controller builds it once at start-up into static storage. `effects` carries the machine data
 // (screw lead, weight direction, …) with every effect value zero by default.
 template <class Scalar>
 StewartCalibrationTable<Scalar> nominal_table(const StewartGeometry<Scalar>& g,
@@ -371,7 +373,8 @@ StewartCalibrationTable<Scalar> nominal_table(const StewartGeometry<Scalar>& g,
   t.machine.calibrated = to_table(g);
   t.effects = to_table(effects);
   t.bounds = default_bounds(g);
-  return seal_table(t);
+  seal(t);
+  return t;
 }
 
 template <class Scalar>
@@ -382,7 +385,8 @@ HybridCalibrationTable<Scalar> nominal_table(const HybridGeometry<Scalar>& g, Sc
   t.machine.up_split = up_split;
   t.effects = to_table(effects);
   t.bounds = default_bounds(g);
-  return seal_table(t);
+  seal(t);
+  return t;
 }
 
 }  // namespace kincal
