@@ -55,7 +55,10 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   bool halved = false;
   for (int pass = 0; pass < options.max_passes; ++pass) {
     const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
-    base = detail::fit_base(robot, corrected, nodes, options.estimator);
+    // The base is fitted to its least-squares minimum (what the linear [H G]
+    // step assumes; for the hybrid seed 000's estimate finished by
+    // Gauss–Newton), here and for the final model.
+    base = detail::fit_base(robot, corrected, nodes, "ols", true);
     MatrixXd H;
     VectorXd y;
     stack(base, false, H, y);
@@ -102,12 +105,13 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
       c += G[i].cols();
     }
     rep.passes = pass + 1;
-    if (scaled_effect_step.norm() <= options.tolerance * std::max(1e-9, y.norm())) {
-      const PoseTable final_table = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
-      base = detail::fit_base(robot, final_table, nodes, options.estimator);
-      break;
-    }
+    if (scaled_effect_step.norm() <= options.tolerance * std::max(1e-9, y.norm())) break;
   }
+  // The base model that goes with the final effect values (the last fit in
+  // the loop may belong to an update that was undone or not yet applied).
+  if (!list.empty())
+    base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
+                            "ols", true);
   MatrixXd H;
   VectorXd y;
   stack(base, false, H, y);
