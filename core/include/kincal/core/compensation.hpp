@@ -43,8 +43,12 @@
 
 #if defined(__GNUC__)
 #define KINCAL_NOINLINE __attribute__((noinline))
+// Not inlined itself, but everything it calls is: the IK below is compiled
+// for its one use (no Jacobian), so the Jacobian code is not linked in.
+#define KINCAL_NOINLINE_FLATTEN __attribute__((noinline, flatten))
 #else
 #define KINCAL_NOINLINE
+#define KINCAL_NOINLINE_FLATTEN
 #endif
 
 namespace kincal {
@@ -92,6 +96,27 @@ template <> struct StillTolerance<double> {
 template <> struct StillTolerance<float> {
   static constexpr float value = 1e-6f;
 };
+
+// exp([ω]×) (Rodrigues, as exp_so3 of core/pose.hpp) for the small rotation
+// of a predicted pose error, without libm: sin θ/θ and (1 − cos θ)/θ² by their
+// series to θ⁸, exact to rounding for θ ≤ 0.1 rad (the next terms are below
+// 3e-18). This keeps sin/cos and their large-argument reduction (0.7 KiB of
+// Cortex-M stack, 2.4 KiB of flash) off the compensation's deepest path.
+// false for θ > 0.1 rad (5.7°): no calibration error is that large.
+template <class Scalar> bool small_rotation(const Vec3<Scalar>& w, Mat3<Scalar>& R) {
+  const Scalar t = w.squaredNorm();
+  if (!(t <= Scalar(0.01))) return false;
+  const Scalar one(1);
+  const Scalar a = one - t / Scalar(6) * (one - t / Scalar(20) * (one - t / Scalar(42) * (one - t / Scalar(72))));
+  const Scalar b =
+      Scalar(0.5) * (one - t / Scalar(12) * (one - t / Scalar(30) * (one - t / Scalar(56) * (one - t / Scalar(90)))));
+  const Mat3<Scalar> W = skew(w);
+  R.noalias() = W * W;  // R = I + a·W + b·W², one term per statement (stack at -Os)
+  R *= b;
+  R += a * W;
+  R.diagonal().array() += one;
+  return true;
+}
 
 namespace compensation_detail {
 
@@ -273,6 +298,12 @@ template <class Machine> class Compensator {
     Pose<Scalar> target;
     const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
     if (st != CompensationStatus::Ok) return st;
+    return solve(target, ideal);
+  }
+
+  // The IK of the pose handed on by prepare(), non-inlined for the same
+  // reason: its locals are not on the stack while prepare() runs.
+  KINCAL_NOINLINE_FLATTEN CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
     if constexpr (family == MachineFamily::Stewart6Ups) {
       return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));  // seed 001
     } else {
@@ -316,7 +347,11 @@ template <class Machine> class Compensator {
         Twist<Scalar> t;
         s = hybrid_error_twist(model_.nominal, model_.reference, f, w, model_.source_errors, t);
         if (s != Status::Ok) return to_compensation_status(s);
-        target = apply_twist(target, Twist<Scalar>(-t));
+        // apply_twist(target, −$_t), its rotation by a libm-free series.
+        Mat3<Scalar> dR;
+        if (!small_rotation(Vec3<Scalar>(-t.template tail<3>()), dR)) return CS::OversizedCorrection;
+        target.p -= t.template head<3>();
+        target.R = dR * target.R;
       }
       return CS::Ok;
     }
