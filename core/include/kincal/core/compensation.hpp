@@ -10,9 +10,10 @@
 // Per NC point (docs/compensation.md):
 //   1. the nominal pose (and temperature, if given) must be finite;
 //   2. the nominal configuration of that pose: its nominal IK command q_nom
-//      (the reference of the correction bound) and, where needed, the static
-//      joint load of a unit weight (compliance) — evaluated there, like
-//      identify's effect nodes;
+//      (the reference of the correction bound), the singularity test (6-UPS:
+//      the IK Jacobian; hybrid: hybrid_wrenches, det J_f = det(W_c·J_S)/det J_P)
+//      and, where needed, the static joint load of a unit weight (compliance)
+//      — evaluated there, like identify's effect nodes;
 //   3. thermal: the pose is pre-scaled about the base origin by 1/(1 + ε),
 //      ε = c·(T − T0) (core/effects.hpp);
 //   4. geometry:
