@@ -219,20 +219,23 @@ TEST(appKincal, ErrorsAreOneLineWithPosition) {
   }
 }
 
-TEST(appKincal, PlaceholdersSayNotImplemented) {
-  const std::string d = kExamples + "/seed001/poses.csv";
-  const std::pair<std::string, std::string> cmds[] = {
-      {"diagnose", "diagnose --robot stewart-seed001 --data " + d + " --json d.json"},
-      {"table", "table --model m.json --out t.hpp"},
-  };
-  for (const auto& [name, args] : cmds) {
-    const ToolRun r = run_tool(args);
-    EXPECT_EQ(r.code, 2) << name;
+TEST(appKincal, DiagnoseAndTableGiveOneLineErrorsOnBadInput) {
+  const std::string d = kExamples + "/seed001/poses.csv";  // commanded poses only, no measurements
+  {
+    const ToolRun r = run_tool("diagnose --robot stewart-seed001 --data " + d + " --json d.json --quiet");
+    EXPECT_EQ(r.code, 1);
     EXPECT_EQ(lines(r.err), 1u) << r.err;
-    EXPECT_EQ(r.err.rfind("kincal: " + name + ": not implemented yet (", 0), 0u) << r.err;
+    EXPECT_TRUE(contains(r.err, "needs the measured pose columns")) << r.err;
+  }
+  {
+    const ToolRun r = run_tool("table --model no_such_model.json --out t.hpp");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_EQ(r.err.rfind("kincal: no_such_model.json", 0), 0u) << r.err;
   }
   // Options are validated like the real thing.
   EXPECT_EQ(run_tool("identify --robot r --data d --out o --estimator magic").code, 2);
+  EXPECT_EQ(run_tool("diagnose --robot stewart-seed001 --data " + d).code, 2);  // --json is required
 }
 
 TEST(appKincal, IdentifyThenCompensateTheSixUps) {

@@ -17,7 +17,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -57,9 +56,8 @@ using detail::NodeData;
 // Least squares by a rank-revealing complete orthogonal decomposition of the
 // column-scaled design (columns in mm and rad, or per unit of an effect input,
 // differ by orders of magnitude; never the normal equations).
-// Relative rank threshold of the column-scaled designs (KINCAL_RANK_THRESHOLD
-// overrides it for experiments).
-const double kRankThreshold = std::getenv("KINCAL_RANK_THRESHOLD") ? std::atof(std::getenv("KINCAL_RANK_THRESHOLD")) : 1e-10;
+// Relative rank threshold of the column-scaled designs.
+constexpr double kRankThreshold = 1e-10;
 
 class LeastSquares {
  public:
