@@ -520,7 +520,8 @@ void float_vs_double(const CalibrationTable<Machine>& t, Pose<double> (*make_pos
   using FloatMachine = typename std::conditional<Machine::family == MachineFamily::Hybrid, HybridMachine<float>,
                                                  StewartMachine<float>>::type;
   const Compensator<Machine> cd(t);
-  const Compensator<FloatMachine> cf(table_cast<float>(t));
+  const auto float_table = table_cast<float>(t);  // the compensator reads it in place
+  const Compensator<FloatMachine> cf(float_table);
   ASSERT_EQ(cf.status(), CS::Ok);
   Vec6<double> home;
   ASSERT_EQ(cd.home_command(home), CS::Ok);

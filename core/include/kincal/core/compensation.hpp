@@ -163,7 +163,10 @@ template <class Machine> class Compensator {
   // its geometry and effects. The table must outlive the compensator (the
   // hybrid's Δχ̂ is read in place, so a table in flash stays there). If the
   // check fails, status() says why and every compensate() returns that status
-  // and holds its output: the caller falls back to a nominal table.
+  // and holds its output: the caller falls back to a nominal table. A
+  // temporary table is refused at compile time (deleted overload below): it
+  // would dangle.
+  explicit Compensator(const Table&& table) = delete;
   explicit Compensator(const Table& table) : table_(&table), status_(validate_table(table)) {
     if (status_ != CompensationStatus::Ok) return;
     model_.load(table.machine);
