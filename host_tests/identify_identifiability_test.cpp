@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
@@ -229,4 +230,98 @@ TEST(identifyIdentifiability, NullSpaceCombinationOfAPlantedDependency) {
     EXPECT_EQ(note.hint, "measure the orientation too");
   }
   EXPECT_TRUE(found);
+}
+
+namespace {
+
+// A toy measurement with known physics: a target point measured in the base
+// frame, p = t + R·(c + a) + b + s·z·e_z, with a platform-fixed offset a
+// (turns with the platform), a base-fixed offset b, and a height-proportional
+// error s (e.g. a scale error of a vertical axis). Rows at a pose: ∂p/∂(a, b, s).
+MatrixXd toy_rows(const Eigen::Matrix<double, 6, 1>& pose) {
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(pose(5), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(pose(4), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(pose(3), Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  MatrixXd rows(3, 7);
+  rows.leftCols(3) = R;
+  rows.middleCols(3, 3).setIdentity();
+  rows.col(6) = pose(2) * Eigen::Vector3d::UnitZ();
+  return rows;
+}
+
+const std::vector<std::string> kToyNames = {"ax", "ay", "az", "bx", "by", "bz", "sz"};
+
+MatrixXd stack(const std::vector<Eigen::Matrix<double, 6, 1>>& poses) {
+  MatrixXd H(3 * static_cast<Index>(poses.size()), 7);
+  for (std::size_t k = 0; k < poses.size(); ++k) H.middleRows(3 * static_cast<Index>(k), 3) = toy_rows(poses[k]);
+  return H;
+}
+
+}  // namespace
+
+TEST(identifyIdentifiability, HintNamesTheMeasurementThatSeparatesEachCombination) {
+  // Poses on a 3 × 3 grid in x, y, all at one height and one orientation: a
+  // and b are confounded (R = I), and s·z0 with b_z. The probes say which
+  // change of pose separates them.
+  std::vector<Eigen::Matrix<double, 6, 1>> poses;
+  for (double x : {-100.0, 0.0, 100.0})
+    for (double y : {-100.0, 0.0, 100.0}) {
+      Eigen::Matrix<double, 6, 1> p;
+      p << x, y, 250.0, 0.0, 0.0, 0.0;
+      poses.push_back(p);
+    }
+  const MatrixXd H = stack(poses);
+  const auto null = null_space_combinations(H, kToyNames);
+  ASSERT_EQ(null.size(), 4u);
+  const IdentifiabilityHint hint = identifiability_hint(null, kToyNames, poses, toy_rows);
+  std::printf("%s\n", hint.text.c_str());
+  ASSERT_EQ(hint.combinations.size(), 4u);
+  for (const CombinationHint& h : hint.combinations) {
+    const std::string& lead = kToyNames[static_cast<std::size_t>(h.combination.columns.front())];
+    std::vector<PoseDof> want;
+    if (lead == "ax") want = {PoseDof::Ry, PoseDof::Rz};  // R·e_x changes only by turns about y or z
+    if (lead == "ay") want = {PoseDof::Rx, PoseDof::Rz};
+    if (lead == "az") want = {PoseDof::Z, PoseDof::Rx, PoseDof::Ry};  // az vs s·z0: a tilt or another height
+    if (lead == "bz") want = {PoseDof::Z};                            // bz vs s·z0: another height
+    EXPECT_EQ(h.revealed_by, want) << h.combination.text;
+  }
+  EXPECT_EQ(hint.parameters, kToyNames);
+  EXPECT_NE(hint.text.find("ax, bx: add poses with different orientations (ry, rz)"), std::string::npos);
+  EXPECT_NE(hint.text.find("ay, by: add poses with different orientations (rx, rz)"), std::string::npos);
+  EXPECT_NE(hint.text.find("bz, sz: add poses at another height (z), e.g. another layer"), std::string::npos);
+  EXPECT_NE(hint.text.find("add poses at another height (z), e.g. another layer or add tilted poses (rx, ry)"),
+            std::string::npos);
+  EXPECT_EQ(hint.text.find('\n'), std::string::npos);
+}
+
+TEST(identifyIdentifiability, HintCallsARedundancyARedundancy) {
+  // Two parameters with the same effect at every pose (b_x twice): no change
+  // of pose separates them. A full-rank design gives no hint.
+  const auto rows = [](const Eigen::Matrix<double, 6, 1>& pose) -> MatrixXd {
+    MatrixXd r(3, 8);
+    r.leftCols(7) = toy_rows(pose);
+    r.col(7) = r.col(3);
+    return r;
+  };
+  std::vector<Eigen::Matrix<double, 6, 1>> poses;
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 12; ++k) {
+    Eigen::Matrix<double, 6, 1> p;
+    p << 100 * u(rng), 100 * u(rng), 250 + 50 * u(rng), 0.2 * u(rng), 0.2 * u(rng), 0.2 * u(rng);
+    poses.push_back(p);
+  }
+  MatrixXd H(36, 8);
+  for (int k = 0; k < 12; ++k) H.middleRows(3 * k, 3) = rows(poses[static_cast<std::size_t>(k)]);
+  std::vector<std::string> names = kToyNames;
+  names.push_back("bx_again");
+  const IdentifiabilityHint hint = identifiability_hint(null_space_combinations(H, names), names, poses, rows);
+  ASSERT_EQ(hint.combinations.size(), 1u);
+  EXPECT_TRUE(hint.combinations[0].revealed_by.empty());
+  EXPECT_FALSE(hint.combinations[0].revealed_jointly);
+  EXPECT_EQ(hint.text, "bx, bx_again: no change of pose separates them (a redundancy of the model: hold one at its "
+                       "nominal value or measure it directly)");
+  EXPECT_TRUE(identifiability_hint(null_space_combinations(stack(poses), kToyNames), kToyNames, poses, toy_rows)
+                  .text.empty());
 }

@@ -9,10 +9,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <exception>
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <variant>
@@ -23,6 +25,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -115,7 +118,69 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
 struct IdentifyArgs {
   std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / liu (hybrid)
   bool exclude_outliers = false;
+  std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
+  Eigen::Index pcr_components = 0;        // 0: by GCV
+  std::vector<long long> coarse_layers;   // hybrid: the coarse stage's layers (default: the cal rows)
 };
+
+// --estimator with --ridge-k / --pcr-components as library options.
+ki::EstimatorOptions estimator_options(const IdentifyArgs& a, const std::string& estimator) {
+  ki::EstimatorOptions o;
+  o.kind = ki::parse_estimator(estimator);
+  if (!a.ridge_k.empty() && o.kind != ki::EstimatorKind::Ridge)
+    throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " + estimator + ")");
+  if (a.pcr_components > 0 && o.kind != ki::EstimatorKind::Pcr)
+    throw ki::InputError("--pcr-components applies to --estimator pcr (the estimator is " + estimator + ")");
+  if (a.ridge_k == "hkb") {
+    o.ridge.rule = ki::RidgeRule::HoerlKennardBaldwin;
+  } else if (!a.ridge_k.empty() && a.ridge_k != "gcv") {
+    o.ridge.rule = ki::RidgeRule::Fixed;
+    o.ridge.k = std::stod(a.ridge_k);  // validated by the option's check
+  }
+  if (a.pcr_components > 0) o.pcr.components = a.pcr_components;
+  return o;
+}
+
+// "ridge, k = 4.3e-4 (GCV)", "pcr, 32 of 42 components (GCV)", "liu, d = 0.68 (Eq. (14))", "ols".
+std::string describe_estimate(const ki::Estimate& e, const ki::EstimatorOptions& o) {
+  std::ostringstream s;
+  s << ki::to_string(o.kind);
+  switch (o.kind) {
+    case ki::EstimatorKind::Ridge:
+      s << ", k = " << e.ridge_k
+        << (o.ridge.rule == ki::RidgeRule::Gcv ? " (generalized cross-validation)"
+                                               : o.ridge.rule == ki::RidgeRule::HoerlKennardBaldwin
+                                                     ? " (Hoerl-Kennard-Baldwin)"
+                                                     : " (given)");
+      break;
+    case ki::EstimatorKind::Pcr:
+      s << ", " << e.pcr_components << " of " << e.x.size() << " principal components"
+        << (o.pcr.components > 0 ? " (given)" : " (generalized cross-validation)");
+      break;
+    case ki::EstimatorKind::Liu: s << ", d = " << e.liu_d << " (Eq. (14))"; break;
+    case ki::EstimatorKind::Ols: break;
+  }
+  return s.str();
+}
+
+nlohmann::json node_tests_json(const std::vector<ki::NodeTest>& tests) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ki::NodeTest& t : tests)
+    out.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
+  return out;
+}
+
+// The sequential outlier search's report: the nodes set aside, with their
+// file line and statistic, and what the rest gives.
+void print_outlier_search(const std::string& file, const std::vector<ki::NodeTest>& removed, bool excluded) {
+  std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n";
+  for (const ki::NodeTest& t : removed)
+    std::cout << "    " << file << ":" << t.line << ": node '" << t.id << "': F = " << t.f << ", p = " << t.p_value
+              << "\n";
+  std::cout << "  " << (excluded ? "the model uses the other nodes only (--exclude-outliers)"
+                                 : "the model still uses every node (exclude with --exclude-outliers)")
+            << "\n";
+}
 
 nlohmann::json stats_json(const ki::PoseErrorStats& s) {
   return {{"nodes", s.count},
@@ -144,50 +209,69 @@ void write_summary(nlohmann::json j, const ki::PoseErrorReport& before, const ki
 }
 
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
-// the identifiable source errors by Liu (Eq. (11), d of Eq. (14)) or OLS.
+// the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
+// or PCR.
 int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
   const std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
-  if (estimator != "liu" && estimator != "ols")
-    throw ki::InputError("--estimator " + estimator + ": the hybrid's fine calibration offers liu (default) and ols");
+  const ki::EstimatorOptions eo = estimator_options(a, estimator);
+  ki::HybridCalibrationOptions ho;
+  ho.estimator = eo.kind == ki::EstimatorKind::Ols     ? ki::HybridFineEstimator::Ols
+                 : eo.kind == ki::EstimatorKind::Ridge ? ki::HybridFineEstimator::Ridge
+                 : eo.kind == ki::EstimatorKind::Pcr   ? ki::HybridFineEstimator::Pcr
+                                                       : ki::HybridFineEstimator::Liu;
+  ho.ridge = eo.ridge;
+  ho.pcr = eo.pcr;
+  ho.coarse_layers = a.coarse_layers;
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (seed 000: coarse encoder offsets, then fine "
             << estimator << " on the identifiable source errors)\n";
-  const ki::HybridCalibration c = ki::calibrate_hybrid(robot, data);
-  std::cout << "  cal nodes " << c.cal_nodes << "\n  coarse (Eq. (15)): " << c.coarse_history.size()
-            << " rounds, converged: " << (c.coarse_converged ? "yes" : "no") << "\n";
+  const ki::HybridCalibration c = ki::calibrate_hybrid(robot, data, ho);
+  std::cout << "  cal nodes " << c.cal_nodes << "\n  coarse (Eq. (15)) on " << c.coarse_ids.size() << " nodes";
+  if (!c.options.coarse_layers.empty()) {
+    std::cout << " of layer(s)";
+    for (long long l : c.options.coarse_layers) std::cout << " " << l;
+    if (c.coarse_test_rows > 0)
+      std::cout << " (" << c.coarse_test_rows << " of them test rows: held out from the fine stage, not from the "
+                << "encoder offsets)";
+  }
+  std::cout << ": " << c.coarse_history.size() << " rounds, converged: " << (c.coarse_converged ? "yes" : "no")
+            << "\n";
   for (std::size_t k = 0; k < c.coarse_history.size(); ++k)
     std::cout << "    round " << k + 1 << ": gauge residual rms " << 1e3 * c.coarse_history[k].rms_residual
               << " um, relative change " << c.coarse_history[k].relative_change << "\n";
-  const ki::Estimate& est = estimator == "liu" ? c.liu : c.ols;
   std::cout << "  fine: " << c.kept.size() << " of 150 source errors identifiable (Sec. 4.1 reconstruction), rank "
-            << c.rank << ", condition number " << c.condition_number;
-  if (estimator == "liu") std::cout << ", Liu d = " << c.liu.liu_d;
-  std::cout << "\n  fit residual rms " << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows)))
-            << " um per gauge coordinate\n";
-  // Nodes inconsistent with the others (deleted-node F test on the fine
-  // design); reported, not excluded.
-  std::vector<std::string> outliers;
-  double p_threshold = 0;
-  if (c.fine_done) {
-    const ki::OutlierReport o = ki::detect_outliers(c.fine_problem);
-    p_threshold = o.p_threshold;
-    for (const Eigen::Index k : o.outlying_nodes) outliers.push_back(c.cal_ids[std::size_t(k)]);
-  }
-  if (outliers.empty()) {
-    std::cout << "  outliers: none (deleted-node F test, p < " << p_threshold << ")\n";
+            << c.rank << ", condition number " << c.condition_number << "\n";
+  // What would make the others identifiable (pure-translation layers leave
+  // whole families of source errors without effect on the gauge).
+  const ki::IdentifiabilityHint hint = ki::hybrid_identifiability_hint(robot, c);
+  if (!hint.text.empty()) std::cout << "  not identifiable from these poses; to separate them: " << hint.text << "\n";
+  // Nodes inconsistent with the others: deleted-node F test on the fine
+  // design, then the sequential search (set the worst aside, refit, repeat).
+  ki::HybridOutlierSearch search;
+  if (c.outliers.empty()) {
+    std::cout << "  outliers: none (deleted-node F test, p < " << c.outlier_p_threshold << ")\n";
   } else {
-    std::cout << "  nodes inconsistent with the others (reported, not excluded):";
-    for (const std::string& id : outliers) std::cout << " " << id;
-    std::cout << "\n";
+    search = ki::hybrid_outlier_search(robot, data, ho);
+    print_outlier_search(a.data, search.removed, a.exclude_outliers && !search.systematic);
+    if (search.systematic)
+      std::cout << "  still flagged after " << search.removed.size() << " of " << c.cal_nodes
+                << " nodes were set aside: the misfit is systematic (an unmodelled effect, or data without noise), "
+                   "not a few bad nodes; no node is excluded\n";
   }
-  const ki::HybridFineEstimator which = estimator == "liu" ? ki::HybridFineEstimator::Liu : ki::HybridFineEstimator::Ols;
-  const ki::HybridCompensation comp = c.compensation(which);
+  std::vector<std::string> outlier_ids;
+  for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
+  const bool excluded = a.exclude_outliers && !search.removed.empty() && !search.systematic;
+  const ki::HybridCalibration& used = excluded ? search.rest : c;
+  const ki::Estimate& est = *used.estimate(ho.estimator);
+  std::cout << "  estimator " << describe_estimate(est, eo) << "; fit residual rms "
+            << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows))) << " um per gauge coordinate\n";
+  const ki::HybridCompensation comp = used.compensation();
   const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
   const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
   std::cout << "\nresiduals before calibration (pose error from the gauge, measured - nominal model):\n";
   ki::print_pose_error_report(before, std::cout, false);
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
   ki::print_pose_error_report(after, std::cout, false);
-  const ki::CalibrationModel model = ki::hybrid_model(robot, c, which, a.data);
+  const ki::CalibrationModel model = ki::hybrid_model(robot, used, std::nullopt, a.data);
   ki::write_model_file(model, a.out);
   std::cout << "\nmodel written to " << a.out << "\n";
   if (!a.json.empty()) {
@@ -195,16 +279,23 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["robot"] = robot.name;
     j["data"] = a.data;
     j["estimator"] = estimator;
-    j["rank"] = c.rank;
+    j["estimator_settings"] = ki::estimator_settings(est, eo);
+    j["rank"] = used.rank;
     j["parameters"] = 150;
-    j["identifiable"] = c.kept_names;
-    j["dropped"] = c.dropped_names;
-    j["condition_number"] = c.condition_number;
-    j["liu_d"] = c.liu.liu_d;
-    j["coarse_iterations"] = c.coarse_history.size();
+    j["identifiable"] = used.kept_names;
+    j["dropped"] = used.dropped_names;
+    j["dropped_hint"] = hint.text;
+    j["condition_number"] = used.condition_number;
+    j["liu_d"] = used.liu.liu_d;
+    j["coarse_iterations"] = used.coarse_history.size();
+    j["coarse_nodes"] = used.coarse_ids.size();
+    j["coarse_layers"] = used.options.coarse_layers;
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
-    j["outliers"] = outliers;
-    j["outlier_p_threshold"] = p_threshold;
+    j["outliers"] = outlier_ids;
+    j["outliers_excluded"] = excluded;
+    j["outliers_systematic"] = search.systematic;
+    j["node_tests"] = node_tests_json(c.node_tests);
+    j["outlier_p_threshold"] = c.outlier_p_threshold;
     write_summary(j, before, after, a.json);
   }
   return 0;
@@ -218,16 +309,21 @@ int run_identify(const IdentifyArgs& a) {
     options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
     return run_identify_hybrid(a, robot, ki::read_pose_table(a.data, options));
   }
-  if (!a.estimator.empty() && a.estimator != "ols")
-    throw ki::InputError("--estimator " + a.estimator +
-                         ": the 6-UPS (seed 001) calibration uses ols; ridge, liu and pcr come with issue #3");
+  const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
+  if (estimator == "liu")
+    throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
+                         "000's estimator for the hybrid's fine stage");
+  if (!a.coarse_layers.empty()) throw ki::InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
+  ki::StewartCalibrationOptions so;
+  so.estimator = estimator_options(a, estimator);
   ki::PoseTableOptions options;
   options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
   const ki::PoseTable data = ki::read_pose_table(a.data, options);
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
-  const ki::StewartCalibration c = ki::calibrate_stewart(robot, data);
+  const ki::StewartCalibration c = ki::calibrate_stewart(robot, data, so);
   std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "
-            << c.condition_number << "\n  iteration   max dQ_int (mm+rad)   rms |dp| (um)   |step| (mm)\n";
+            << c.condition_number << "\n  estimator " << describe_estimate(c.fit, so.estimator)
+            << "\n  iteration   max dQ_int (mm+rad)   rms |dp| (um)   |step| (mm)\n";
   for (const ki::StewartIteration& h : c.history) {
     char line[128];
     std::snprintf(line, sizeof line, "  %9d %21.3e %15.4f %13.3e\n", h.iteration, h.max_dq_int, 1e3 * h.rms_position_mm,
@@ -238,7 +334,7 @@ int run_identify(const IdentifyArgs& a) {
   if (c.outliers.empty()) {
     std::cout << "  outliers: none (deleted-node F test, p < " << c.outlier_p_threshold << ")\n";
   } else {
-    search = ki::stewart_outlier_search(robot, data);
+    search = ki::stewart_outlier_search(robot, data, so);
     std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n";
     for (const ki::NodeTest& t : search.removed)
       std::cout << "    " << a.data << ":" << t.line << ": node '" << t.id << "': F = " << t.f << ", p = " << t.p_value
@@ -265,7 +361,8 @@ int run_identify(const IdentifyArgs& a) {
     nlohmann::json j;
     j["robot"] = robot.name;
     j["data"] = a.data;
-    j["estimator"] = "ols";
+    j["estimator"] = estimator;
+    j["estimator_settings"] = ki::estimator_settings(used.fit, used.estimator);
     j["rank"] = used.rank;
     j["parameters"] = 42;
     j["dropped"] = nlohmann::json::array();
@@ -274,10 +371,7 @@ int run_identify(const IdentifyArgs& a) {
     j["iterations"] = used.history.size();
     j["outliers"] = outlier_ids;
     j["outliers_excluded"] = a.exclude_outliers && !outlier_ids.empty();
-    nlohmann::json tests = nlohmann::json::array();
-    for (const ki::NodeTest& t : c.node_tests)
-      tests.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
-    j["node_tests"] = tests;
+    j["node_tests"] = node_tests_json(c.node_tests);
     j["outlier_p_threshold"] = c.outlier_p_threshold;
     write_summary(j, before, after, a.json);
   }
@@ -421,6 +515,26 @@ int run(int argc, char** argv) {
   identify->add_option("--out", ident.out, "MODEL.json to write")->required();
   identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr")
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
+  identify->add_option("--ridge-k", ident.ridge_k,
+                       "ridge's k: gcv (generalized cross-validation, default), hkb (Hoerl-Kennard-Baldwin) or a "
+                       "number >= 0")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            if (v == "gcv" || v == "hkb") return std::string();
+            char* end = nullptr;
+            const double k = std::strtod(v.c_str(), &end);
+            return !v.empty() && end == v.c_str() + v.size() && std::isfinite(k) && k >= 0
+                       ? std::string()
+                       : std::string("must be gcv, hkb or a number >= 0, not '" + v + "'");
+          },
+          "K"));
+  identify->add_option("--pcr-components", ident.pcr_components,
+                       "PCR: number of principal components kept (default: by generalized cross-validation)")
+      ->check(CLI::PositiveNumber);
+  identify->add_option("--coarse-layers", ident.coarse_layers,
+                       "hybrid: layers whose rows run the coarse stage, e.g. 2 (seed 000 Sec. 5: the middle layer); "
+                       "default: the cal rows")
+      ->delimiter(',');
   identify->add_option("--effects", ident.effects, "effects to include (issue #4)");
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
   identify->add_flag("--exclude-outliers", ident.exclude_outliers,

@@ -487,7 +487,103 @@ Eigen::VectorXd PreparedDesign::standard_errors(const Eigen::VectorXd& filter, d
   return (sigma2 * var).cwiseSqrt();
 }
 
-// ---- one-shot estimators -------------------------------------------------------
+double PreparedDesign::ridge_gcv(const Eigen::VectorXd& y, FitWorkspace& ws, double k) const {
+  if (!std::isfinite(k) || k < 0) throw InputError("ridge GCV: k = " + fmt(k) + " (must be finite and >= 0)");
+  const double rss_ols = project(y, ws);
+  const double n = static_cast<double>(rows());
+  double rss = rss_ols, trace = 0;
+  for (Index j = 0; j < rank_; ++j) {
+    const double l = s_(j) * s_(j), f = k == 0 ? 1.0 : l / (l + k);
+    rss += (1 - f) * (1 - f) * ws.c(j) * ws.c(j);
+    trace += f;
+  }
+  return n * rss / ((n - trace) * (n - trace));
+}
+
+double PreparedDesign::ridge_k_gcv(const Eigen::VectorXd& y, FitWorkspace& ws) const {
+  if (rank_ == 0) return 0.0;
+  const double rss_ols = project(y, ws);
+  const double n = static_cast<double>(rows());
+  // GCV as a function of t = log k, evaluated from the projection c alone.
+  auto gcv = [&](double t) {
+    const double k = std::exp(t);
+    double rss = rss_ols, trace = 0;
+    for (Index j = 0; j < rank_; ++j) {
+      const double l = s_(j) * s_(j), f = l / (l + k);
+      rss += (1 - f) * (1 - f) * ws.c(j) * ws.c(j);
+      trace += f;
+    }
+    return n * rss / ((n - trace) * (n - trace));
+  };
+  // GCV need not be unimodal: a log grid from far below the smallest to above
+  // the largest eigenvalue (where ridge is OLS resp. shrinks everything),
+  // then golden section between the best grid point's neighbours.
+  const double lmin = s_(rank_ - 1) * s_(rank_ - 1), lmax = s_(0) * s_(0);
+  const double t0 = std::log(lmin) - 6 * std::log(10.0), t1 = std::log(lmax) + 2 * std::log(10.0);
+  constexpr int kGrid = 200;
+  int best = 0;
+  double best_value = std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= kGrid; ++i) {
+    const double v = gcv(t0 + (t1 - t0) * i / kGrid);
+    if (v < best_value) {
+      best_value = v;
+      best = i;
+    }
+  }
+  const double step = (t1 - t0) / kGrid;
+  const double lo = t0 + step * std::max(best - 1, 0), hi = t0 + step * std::min(best + 1, kGrid);
+  const double t = golden_min(gcv, lo, hi), value = gcv(t);
+  double k = std::exp(t0 + step * best);
+  if (value <= best_value) {
+    k = std::exp(t);
+    best_value = value;
+  }
+  // k = 0 (OLS) when it cross-validates at least as well, e.g. noise-free data
+  // (not on a rank-deficient design, where k = 0 has no unique solution).
+  if (!full_rank()) return k;
+  const double trace0 = static_cast<double>(rank_);
+  const double gcv0 = n * rss_ols / ((n - trace0) * (n - trace0));
+  return gcv0 <= best_value ? 0.0 : k;
+}
+
+Eigen::Index PreparedDesign::pcr_components_gcv(const Eigen::VectorXd& y, FitWorkspace& ws) const {
+  if (rank_ == 0) throw InputError("PCR: the design has rank 0");
+  const double rss_ols = project(y, ws);
+  const double n = static_cast<double>(rows());
+  // RSS of the first k components: RSS_OLS + Σ_{j ≥ k} c_j² (dropped components' fit).
+  double dropped = ws.c.squaredNorm();
+  Index best = 1;
+  double best_value = std::numeric_limits<double>::infinity();
+  for (Index k = 1; k <= rank_; ++k) {
+    dropped -= ws.c(k - 1) * ws.c(k - 1);
+    const double rss = rss_ols + std::max(dropped, 0.0);
+    const double value = n * rss / ((n - static_cast<double>(k)) * (n - static_cast<double>(k)));
+    if (value < best_value) {
+      best_value = value;
+      best = k;
+    }
+  }
+  return best;
+}
+
+// ---- one entry point ------------------------------------------------------------
+
+const char* to_string(EstimatorKind kind) {
+  switch (kind) {
+    case EstimatorKind::Ols: return "ols";
+    case EstimatorKind::Ridge: return "ridge";
+    case EstimatorKind::Pcr: return "pcr";
+    case EstimatorKind::Liu: return "liu";
+  }
+  return "?";
+}
+
+EstimatorKind parse_estimator(const std::string& name) {
+  for (EstimatorKind k : {EstimatorKind::Ols, EstimatorKind::Ridge, EstimatorKind::Pcr, EstimatorKind::Liu}) {
+    if (name == to_string(k)) return k;
+  }
+  throw InputError("unknown estimator '" + name + "' (ols, ridge, pcr, liu)");
+}
 
 namespace {
 
@@ -508,60 +604,157 @@ Estimate make_estimate(const PreparedDesign& design, const LinearProblem& proble
   return e;
 }
 
+bool needs_full_rank(const EstimatorOptions& o) {
+  switch (o.kind) {
+    case EstimatorKind::Ols:
+    case EstimatorKind::Liu: return true;
+    case EstimatorKind::Ridge:
+      return o.ridge.rule == RidgeRule::HoerlKennardBaldwin || (o.ridge.rule == RidgeRule::Fixed && o.ridge.k == 0);
+    case EstimatorKind::Pcr: return false;
+  }
+  return true;
+}
+
 }  // namespace
 
-Estimate ols(const LinearProblem& problem, double rcond) {
-  validate(problem);
-  const PreparedDesign design(problem, {rcond, true});
+Estimate estimate(const PreparedDesign& design, const LinearProblem& problem, const EstimatorOptions& options) {
+  validate_y(problem);
+  if (problem.H.rows() != design.rows() || problem.H.cols() != design.cols()) {
+    throw std::invalid_argument("estimate: the problem is " + idx(problem.H.rows()) + " x " + idx(problem.H.cols()) +
+                                ", the prepared design " + idx(design.rows()) + " x " + idx(design.cols()));
+  }
   FitWorkspace ws;
   VectorXd x;
-  const FitInfo info = design.ols(problem.y, x, ws);
-  return make_estimate(design, problem, "ols", std::move(x), info, VectorXd::Ones(design.rank()));
+  const VectorXd l = design.singular_values().head(design.rank()).array().square();
+  switch (options.kind) {
+    case EstimatorKind::Ols: {
+      const FitInfo info = design.ols(problem.y, x, ws);
+      return make_estimate(design, problem, "ols", std::move(x), info, VectorXd::Ones(design.rank()));
+    }
+    case EstimatorKind::Ridge: {
+      std::optional<double> k;
+      if (options.ridge.rule == RidgeRule::Fixed) k = options.ridge.k;
+      if (options.ridge.rule == RidgeRule::Gcv) k = design.ridge_k_gcv(problem.y, ws);
+      const FitInfo info = design.ridge(problem.y, x, ws, k);
+      const VectorXd f = l.array() / (l.array() + info.k);
+      Estimate e = make_estimate(design, problem, "ridge", std::move(x), info, f);
+      e.ridge_k = info.k;
+      e.ridge_rule = options.ridge.rule;
+      e.ridge_k_default = options.ridge.rule == RidgeRule::HoerlKennardBaldwin;
+      return e;
+    }
+    case EstimatorKind::Pcr: {
+      const PcrOptions& po = options.pcr;
+      const bool gcv = po.components <= 0 && !(po.variance_fraction > 0) && po.by_gcv;
+      const Index comps = gcv ? design.pcr_components_gcv(problem.y, ws) : design.pcr_components(po);
+      const FitInfo info = design.pcr(problem.y, x, ws, comps);
+      VectorXd f = VectorXd::Zero(design.rank());
+      f.head(comps).setOnes();
+      Estimate e = make_estimate(design, problem, "pcr", std::move(x), info, f);
+      e.pcr_components = comps;
+      return e;
+    }
+    case EstimatorKind::Liu: {
+      const FitInfo info = design.liu(problem.y, x, ws, options.liu);
+      const VectorXd f = (l.array() + info.d) / (l.array() + 1.0);
+      Estimate e = make_estimate(design, problem, "liu", std::move(x), info, f);
+      e.liu_d = info.d;
+      e.liu_d_unclamped = info.d_unclamped;
+      e.liu_d_clamped = info.d_clamped;
+      e.liu_rule = options.liu.rule;
+      return e;
+    }
+  }
+  throw std::invalid_argument("estimate: unknown estimator kind");
+}
+
+Estimate estimate(const LinearProblem& problem, const EstimatorOptions& options, double rcond) {
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, needs_full_rank(options)});
+  return estimate(design, problem, options);
+}
+
+std::map<std::string, double> estimator_settings(const Estimate& e, const EstimatorOptions& options) {
+  std::map<std::string, double> s;
+  switch (options.kind) {
+    case EstimatorKind::Ols: break;
+    case EstimatorKind::Ridge:
+      s["ridge_k"] = e.ridge_k;
+      if (options.ridge.rule == RidgeRule::Gcv) s["ridge_k_gcv"] = 1;
+      if (options.ridge.rule == RidgeRule::HoerlKennardBaldwin) s["ridge_k_hkb"] = 1;
+      break;
+    case EstimatorKind::Pcr:
+      s["pcr_components"] = static_cast<double>(e.pcr_components);
+      if (options.pcr.components <= 0) {
+        if (options.pcr.variance_fraction > 0)
+          s["pcr_variance_fraction"] = options.pcr.variance_fraction;
+        else if (options.pcr.by_gcv)
+          s["pcr_components_gcv"] = 1;
+        else
+          s["pcr_max_condition_index"] = options.pcr.max_condition_index;
+      }
+      break;
+    case EstimatorKind::Liu:
+      s["liu_d"] = e.liu_d;
+      s["liu_d_unclamped"] = e.liu_d_unclamped;
+      if (options.liu.rule == LiuRule::Fixed) s["liu_d_fixed"] = 1;
+      if (options.liu.rule == LiuRule::MinimiseMse) s["liu_d_min_mse"] = 1;
+      break;
+  }
+  return s;
+}
+
+// ---- one-shot estimators -------------------------------------------------------
+
+Estimate ols(const LinearProblem& problem, double rcond) {
+  return estimate(problem, EstimatorOptions{}, rcond);
 }
 
 Estimate ridge(const LinearProblem& problem, std::optional<double> k, double rcond) {
-  validate(problem);
-  const bool need_full = !k || *k == 0;
-  const PreparedDesign design(problem, {rcond, need_full});
-  FitWorkspace ws;
-  VectorXd x;
-  const FitInfo info = design.ridge(problem.y, x, ws, k);
-  const VectorXd l = design.singular_values().head(design.rank()).array().square();
-  const VectorXd f = l.array() / (l.array() + info.k);
-  Estimate e = make_estimate(design, problem, "ridge", std::move(x), info, f);
-  e.ridge_k = info.k;
-  e.ridge_k_default = !k.has_value();
-  return e;
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Ridge;
+  o.ridge.rule = k ? RidgeRule::Fixed : RidgeRule::HoerlKennardBaldwin;
+  o.ridge.k = k.value_or(0.0);
+  if (k && (!std::isfinite(*k) || *k < 0)) throw InputError("ridge: k = " + fmt(*k) + " (must be finite and >= 0)");
+  return estimate(problem, o, rcond);
 }
 
 Estimate principal_components(const LinearProblem& problem, const PcrOptions& options, double rcond) {
-  validate(problem);
-  const PreparedDesign design(problem, {rcond, false});
-  const Index comps = design.pcr_components(options);
-  FitWorkspace ws;
-  VectorXd x;
-  const FitInfo info = design.pcr(problem.y, x, ws, comps);
-  VectorXd f = VectorXd::Zero(design.rank());
-  f.head(comps).setOnes();
-  Estimate e = make_estimate(design, problem, "pcr", std::move(x), info, f);
-  e.pcr_components = comps;
-  return e;
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Pcr;
+  o.pcr = options;
+  return estimate(problem, o, rcond);
 }
 
 Estimate liu(const LinearProblem& problem, const LiuOptions& options, double rcond) {
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Liu;
+  o.liu = options;
+  return estimate(problem, o, rcond);
+}
+
+double ridge_gcv(const LinearProblem& problem, double k, double rcond) {
   validate(problem);
-  const PreparedDesign design(problem, {rcond, true});
+  const PreparedDesign design(problem, {rcond, false});
   FitWorkspace ws;
+  return design.ridge_gcv(problem.y, ws, k);
+}
+
+double ridge_parameter(const LinearProblem& problem, const RidgeOptions& options, double rcond) {
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Ridge;
+  o.ridge = options;
+  if (options.rule == RidgeRule::Fixed) {
+    if (!std::isfinite(options.k) || options.k < 0)
+      throw InputError("ridge: k = " + fmt(options.k) + " (must be finite and >= 0)");
+    return options.k;
+  }
+  validate(problem);
+  const PreparedDesign design(problem, {rcond, needs_full_rank(o)});
+  FitWorkspace ws;
+  if (options.rule == RidgeRule::Gcv) return design.ridge_k_gcv(problem.y, ws);
   VectorXd x;
-  const FitInfo info = design.liu(problem.y, x, ws, options);
-  const VectorXd l = design.singular_values().head(design.rank()).array().square();
-  const VectorXd f = (l.array() + info.d) / (l.array() + 1.0);
-  Estimate e = make_estimate(design, problem, "liu", std::move(x), info, f);
-  e.liu_d = info.d;
-  e.liu_d_unclamped = info.d_unclamped;
-  e.liu_d_clamped = info.d_clamped;
-  e.liu_rule = options.rule;
-  return e;
+  return design.ridge(problem.y, x, ws, std::nullopt).k;
 }
 
 LiuParameter liu_optimal_d(const LinearProblem& problem, LiuRule rule, double rcond) {
@@ -655,6 +848,15 @@ OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions
     if (st.outlying) rep.outlying_nodes.push_back(st.node);
   }
   return rep;
+}
+
+const NodeTest* most_significant_outlier(const std::vector<NodeTest>& tests) {
+  const NodeTest* worst = nullptr;
+  for (const NodeTest& t : tests) {
+    if (!t.outlying) continue;
+    if (worst == nullptr || t.p_value < worst->p_value || (t.p_value == worst->p_value && t.f > worst->f)) worst = &t;
+  }
+  return worst;
 }
 
 LinearProblem without_nodes(const LinearProblem& problem, const std::vector<Eigen::Index>& nodes) {

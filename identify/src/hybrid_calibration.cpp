@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <random>
 #include <string>
@@ -25,6 +26,8 @@ using Eigen::VectorXd;
 
 struct Node {
   std::string id;
+  std::size_t line = 0;
+  Role role = Role::Cal;
   Vec6<double> q = Vec6<double>::Zero();
   Pose<double> commanded;
   HybridPassive<double> guess;
@@ -33,12 +36,16 @@ struct Node {
 
 bool usable_status(const std::string& s) { return s.empty() || s == "ok"; }
 
-std::vector<Node> cal_nodes(const HybridGeometry<double>& g, const PoseTable& data) {
+// The rows with gauge targets (and no failure status) that `take` selects.
+template <class Select>
+std::vector<Node> gauge_nodes(const HybridGeometry<double>& g, const PoseTable& data, Select take) {
   std::vector<Node> nodes;
   for (const PoseRow& row : data.rows) {
-    if (row.role != Role::Cal || !row.targets || !usable_status(row.status)) continue;
+    if (!take(row) || !row.targets || !usable_status(row.status)) continue;
     Node n;
     n.id = row.id;
+    n.line = row.line;
+    n.role = row.role;
     n.commanded = Pose<double>::from_xyz_rpy(row.commanded);
     n.guess = g.home;
     Vec6<double> q_ik;
@@ -85,15 +92,71 @@ HybridGeometry<double> HybridCompensation::controller_geometry() const {
   return g;
 }
 
-HybridCompensation HybridCalibration::compensation(HybridFineEstimator estimator) const {
+const char* to_string(HybridFineEstimator estimator) {
+  switch (estimator) {
+    case HybridFineEstimator::None: return "coarse-ols";
+    case HybridFineEstimator::Ols: return "ols";
+    case HybridFineEstimator::Liu: return "liu";
+    case HybridFineEstimator::Ridge: return "ridge";
+    case HybridFineEstimator::Pcr: return "pcr";
+  }
+  return "?";
+}
+
+namespace {
+
+// The EstimatorOptions of a fine estimator under the calibration's options.
+EstimatorOptions fine_options(const HybridCalibrationOptions& o, HybridFineEstimator estimator) {
+  EstimatorOptions e;
+  e.ridge = o.ridge;
+  e.pcr = o.pcr;
+  e.liu = o.liu;
+  switch (estimator) {
+    case HybridFineEstimator::Ridge: e.kind = EstimatorKind::Ridge; break;
+    case HybridFineEstimator::Pcr: e.kind = EstimatorKind::Pcr; break;
+    case HybridFineEstimator::Liu: e.kind = EstimatorKind::Liu; break;
+    default: e.kind = EstimatorKind::Ols; break;
+  }
+  return e;
+}
+
+}  // namespace
+
+const Estimate* HybridCalibration::estimate(HybridFineEstimator estimator) const {
+  if (!fine_done) return nullptr;
+  switch (estimator) {
+    case HybridFineEstimator::Ols: return &ols;
+    case HybridFineEstimator::Liu: return &liu;
+    case HybridFineEstimator::Ridge: return &ridge;
+    case HybridFineEstimator::Pcr: return &pcr;
+    case HybridFineEstimator::None: break;
+  }
+  return nullptr;
+}
+
+Eigen::VectorXd HybridCalibration::chi(HybridFineEstimator estimator) const {
+  if (fine_done) {
+    switch (estimator) {
+      case HybridFineEstimator::Ols: return chi_ols;
+      case HybridFineEstimator::Liu: return chi_liu;
+      case HybridFineEstimator::Ridge: return chi_ridge;
+      case HybridFineEstimator::Pcr: return chi_pcr;
+      case HybridFineEstimator::None: break;
+    }
+  }
+  return VectorXd::Zero(HybridErrorModel::kParameterCount);
+}
+
+HybridCompensation HybridCalibration::compensation(std::optional<HybridFineEstimator> which) const {
+  const HybridFineEstimator estimator = which.value_or(options.estimator);
   HybridCompensation c;
   c.nominal = nominal;
   c.model = std::make_shared<const HybridErrorModel>(nominal);
   c.encoder_offsets = coarse_xi;
   if (estimator != HybridFineEstimator::None && fine_done) {
-    const VectorXd& chi = estimator == HybridFineEstimator::Liu ? chi_liu : chi_ols;
-    c.encoder_offsets += chi.head<6>();
-    c.structural = chi;
+    const VectorXd x = chi(estimator);
+    c.encoder_offsets += x.head<6>();
+    c.structural = x;
     c.structural.head<6>().setZero();
   }
   return c;
@@ -108,26 +171,47 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     throw InputError("hybrid calibration: eps_xi must be > 0 and max_coarse_iterations >= 1");
   const HybridGeometry<double>& g0 = nominal.hybrid();
   const double radius = nominal.gauge_radius;
-  const std::vector<Node> nodes = cal_nodes(g0, data);
+  const std::vector<Node> nodes = gauge_nodes(g0, data, [](const PoseRow& row) { return row.role == Role::Cal; });
   const Index N = static_cast<Index>(nodes.size());
   if (N < 2) throw InputError(data.file, 0, 0, "hybrid calibration: fewer than 2 usable cal rows with gauge targets");
+  // The coarse stage's own node set (options.coarse_layers), or the cal nodes.
+  std::vector<Node> coarse_nodes;
+  if (!options.coarse_layers.empty()) {
+    const std::vector<long long>& layers = options.coarse_layers;
+    coarse_nodes = gauge_nodes(g0, data, [&](const PoseRow& row) {
+      return row.layer && std::find(layers.begin(), layers.end(), *row.layer) != layers.end();
+    });
+    std::string list;
+    for (long long l : layers) list += (list.empty() ? "" : ", ") + std::to_string(l);
+    if (coarse_nodes.empty())
+      throw InputError(data.file, 0, 0,
+                       "hybrid calibration: no usable rows with gauge targets in the coarse layer(s) " + list +
+                           (data.has_layer ? "" : " (the file has no layer column)"));
+  }
+  const std::vector<Node>& coarse = options.coarse_layers.empty() ? nodes : coarse_nodes;
+  const Index Nc = static_cast<Index>(coarse.size());
 
   HybridCalibration out;
   out.nominal = g0;
+  out.options = options;
   out.gauge_radius = radius;
   out.cal_nodes = nodes.size();
   for (const Node& n : nodes) out.cal_ids.push_back(n.id);
+  for (const Node& n : coarse) {
+    out.coarse_ids.push_back(n.id);
+    if (n.role == Role::Test) ++out.coarse_test_rows;
+  }
   const HybridErrorModel model(g0);
   const auto& params = model.parameters();
   MatrixXd B(6, HybridErrorModel::kParameterCount);
 
   // ---- coarse (Eq. (15)): H_ξ at the nominal configuration of each node ----
-  MatrixXd Hxi(9 * N, 6);
-  for (Index k = 0; k < N; ++k) {
-    const Node& n = nodes[static_cast<std::size_t>(k)];
+  MatrixXd Hxi(9 * Nc, 6);
+  for (Index k = 0; k < Nc; ++k) {
+    const Node& n = coarse[static_cast<std::size_t>(k)];
     const Status st = model.error_jacobian(n.commanded, B);
     if (st != Status::Ok)
-      throw InputError(data.file, 0, 0,
+      throw InputError(data.file, n.line, 0,
                        "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
     Hxi.middleRows(9 * k, 9) = gauge_map(g0, radius, n.commanded) * B.leftCols(6);
   }
@@ -136,17 +220,18 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     throw InputError(data.file, 0, 0,
                      "hybrid calibration: H_xi is rank-deficient (rank " + std::to_string(qr.rank()) + " < 6)");
 
+  // Gauge residuals measured − predicted of a node set on the machine with the
+  // current encoder estimate.
   HybridGeometry<double> gc = g0;
-  VectorXd r(9 * N);
-  auto residual = [&]() {
+  auto residual = [&](const std::vector<Node>& set, VectorXd& r) {
     gc.joint_offset = g0.joint_offset + out.coarse_xi;
-    for (Index k = 0; k < N; ++k) {
-      const Node& n = nodes[static_cast<std::size_t>(k)];
-      r.segment<9>(9 * k) = n.measured - targets9(g0, radius, predict(gc, n, data.file));
-    }
+    r.resize(9 * static_cast<Index>(set.size()));
+    for (std::size_t k = 0; k < set.size(); ++k)
+      r.segment<9>(9 * static_cast<Index>(k)) = set[k].measured - targets9(g0, radius, predict(gc, set[k], data.file));
   };
+  VectorXd r;
   for (int it = 0; it < options.max_coarse_iterations; ++it) {
-    residual();
+    residual(coarse, r);
     HybridCoarseIteration h;
     h.rms_residual = std::sqrt(r.squaredNorm() / static_cast<double>(r.size()));
     h.delta_xi = qr.solve(r);
@@ -165,11 +250,12 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   if (!options.fine) return out;
 
   // ---- fine: linearise at the coarse machine's configuration of each node ----
-  residual();
+  residual(nodes, r);
   MatrixXd H(9 * N, HybridErrorModel::kParameterCount);
   for (Index k = 0; k < N; ++k) {
     const Node& n = nodes[static_cast<std::size_t>(k)];
     const Pose<double> tool = predict(gc, n, data.file);
+    out.fine_poses.push_back(tool.to_xyz_rpy());
     const Status st = model.error_jacobian(tool, B);
     if (st != Status::Ok)
       throw InputError(data.file, 0, 0,
@@ -225,20 +311,112 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // then of D·Δχ and are scaled back (Liu's shrinkage depends on the scaling).
   out.column_scale = options.scale_columns ? column_scales(fp.H) : VectorXd::Ones(fp.H.cols());
   for (Index c = 0; c < fp.H.cols(); ++c) fp.H.col(c) /= out.column_scale(c);
-  out.ols = ols(fp);
-  out.liu = liu(fp, options.liu);
-  for (Estimate* e : {&out.ols, &out.liu}) {
+  // One SVD for the four estimators (the kept columns are independent by
+  // construction, so the design has full rank).
+  const PreparedDesign design(fp);
+  out.ols = estimate(design, fp, fine_options(options, HybridFineEstimator::Ols));
+  out.liu = estimate(design, fp, fine_options(options, HybridFineEstimator::Liu));
+  out.ridge = estimate(design, fp, fine_options(options, HybridFineEstimator::Ridge));
+  out.pcr = estimate(design, fp, fine_options(options, HybridFineEstimator::Pcr));
+  for (Estimate* e : {&out.ols, &out.liu, &out.ridge, &out.pcr}) {
     e->x = e->x.cwiseQuotient(out.column_scale);
     e->standard_error = e->standard_error.cwiseQuotient(out.column_scale);
   }
-  out.chi_ols = VectorXd::Zero(HybridErrorModel::kParameterCount);
-  out.chi_liu = VectorXd::Zero(HybridErrorModel::kParameterCount);
-  for (std::size_t c = 0; c < out.kept.size(); ++c) {
-    out.chi_ols(out.kept[c]) = out.ols.x(static_cast<Index>(c));
-    out.chi_liu(out.kept[c]) = out.liu.x(static_cast<Index>(c));
+  for (auto [chi, e] : {std::pair{&out.chi_ols, &out.ols}, std::pair{&out.chi_liu, &out.liu},
+                        std::pair{&out.chi_ridge, &out.ridge}, std::pair{&out.chi_pcr, &out.pcr}}) {
+    *chi = VectorXd::Zero(HybridErrorModel::kParameterCount);
+    for (std::size_t c = 0; c < out.kept.size(); ++c) (*chi)(out.kept[c]) = e->x(static_cast<Index>(c));
   }
   out.fine_done = true;
+  if (options.test_nodes) {
+    const OutlierReport o = detect_outliers(fp);
+    for (const NodeStatistic& st : o.nodes) {
+      const Node& n = nodes[static_cast<std::size_t>(st.node)];
+      out.node_tests.push_back({n.id, n.line, st.f, st.p_value, st.testable, st.outlying});
+      if (st.outlying) out.outliers.push_back(n.id);
+    }
+    out.outlier_p_threshold = o.p_threshold;
+  }
   return out;
+}
+
+HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data,
+                                          const HybridCalibrationOptions& options) {
+  HybridCalibrationOptions o = options;
+  o.test_nodes = true;
+  HybridOutlierSearch out;
+  PoseTable rest = data;
+  out.rest = calibrate_hybrid(nominal, rest, o);
+  // A gross error is a few nodes; a misfit still flagged after a tenth of the
+  // nodes is set aside is systematic (an unmodelled effect, or data without
+  // noise, where the residual is the linearisation error): stop and say so.
+  const std::size_t limit = std::max<std::size_t>(1, out.rest.cal_nodes / 10);
+  while (!out.rest.outliers.empty()) {
+    if (out.removed.size() >= limit) {
+      out.systematic = true;
+      break;
+    }
+    const NodeTest* worst = most_significant_outlier(out.rest.node_tests);
+    out.removed.push_back(*worst);
+    const std::string id = worst->id;
+    rest.rows.erase(std::find_if(rest.rows.begin(), rest.rows.end(), [&](const PoseRow& row) { return row.id == id; }));
+    out.rest = calibrate_hybrid(nominal, rest, o);
+  }
+  return out;
+}
+
+IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const HybridCalibration& cal,
+                                                const HintOptions& options) {
+  if (!nominal.is_hybrid()) throw InputError("hybrid_identifiability_hint needs a hybrid robot");
+  if (!cal.fine_done || cal.fine_poses.empty()) return {};
+  const HybridGeometry<double>& g0 = nominal.hybrid();
+  const double radius = nominal.gauge_radius;
+  const HybridErrorModel model(g0);
+  // The fine stage's rows at a pose: gauge map × B (Eq. (9)), all 150 columns.
+  const PoseDesignRows rows = [&](const Eigen::Matrix<double, 6, 1>& p) -> MatrixXd {
+    const Pose<double> pose = Pose<double>::from_xyz_rpy(p);
+    MatrixXd B(6, HybridErrorModel::kParameterCount);
+    if (model.error_jacobian(pose, B) != Status::Ok) return {};
+    return gauge_map(g0, radius, pose) * B;
+  };
+  MatrixXd H(9 * static_cast<Index>(cal.fine_poses.size()), HybridErrorModel::kParameterCount);
+  Index at = 0;
+  for (const auto& p : cal.fine_poses) {
+    const MatrixXd b = rows(p);
+    if (b.rows() != 9) throw InputError("hybrid identifiability: error Jacobian failed at a calibration pose");
+    H.middleRows(at, 9) = b;
+    at += 9;
+  }
+  std::vector<std::string> names;
+  for (const auto& prm : model.parameters()) names.push_back(prm.name);
+  // Section 4.1's second way drops a column when it is (to the tolerance) in
+  // the span of the kept ones, h_j ≈ H_kept·a_j; so e_j − Σ a_jk e_k is a
+  // direction the measurements (nearly) do not see, one per dropped column.
+  MatrixXd K(H.rows(), static_cast<Index>(cal.kept.size()));
+  for (std::size_t c = 0; c < cal.kept.size(); ++c) K.col(static_cast<Index>(c)) = H.col(cal.kept[c]);
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(K);
+  std::vector<NullCombination> combos;
+  for (const Index j : cal.dropped) {
+    const double hj = H.col(j).norm();
+    const VectorXd coef = hj > 0 ? VectorXd(qr.solve(H.col(j))) : VectorXd::Zero(K.cols());
+    NullCombination c;
+    c.columns.push_back(j);
+    c.coefficients.push_back(1.0);
+    c.text = "+1*" + names[static_cast<std::size_t>(j)];
+    for (Index k = 0; k < K.cols(); ++k) {
+      if (!(std::abs(coef(k)) * K.col(k).norm() > 1e-9 * hj)) continue;
+      const Index col = cal.kept[static_cast<std::size_t>(k)];
+      c.columns.push_back(col);
+      c.coefficients.push_back(-coef(k));
+      char term[96];
+      std::snprintf(term, sizeof term, " %+.4g*%s", -coef(k), names[static_cast<std::size_t>(col)].c_str());
+      c.text += term;
+    }
+    combos.push_back(std::move(c));
+  }
+  HintOptions o = options;
+  o.leading_only = true;  // name the dropped errors, not every kept one they lean on
+  return identifiability_hint(combos, names, cal.fine_poses, rows, o);
 }
 
 Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& requested, Vec6<double>& q) {
@@ -259,7 +437,7 @@ Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& reques
 }
 
 Status compensate_hybrid(const HybridCalibration& calibration, const Pose<double>& requested, Vec6<double>& q) {
-  return compensate_hybrid(calibration.compensation(HybridFineEstimator::Liu), requested, q);
+  return compensate_hybrid(calibration.compensation(), requested, q);
 }
 
 std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const HybridGeometry<double>& nominal,
@@ -352,20 +530,18 @@ HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int ru
   return out;
 }
 
-CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal, HybridFineEstimator estimator,
-                              const std::string& data_file) {
+CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal,
+                              std::optional<HybridFineEstimator> which, const std::string& data_file) {
   if (!nominal.is_hybrid()) throw InputError("hybrid_model needs a hybrid robot");
+  const HybridFineEstimator estimator = which.value_or(cal.options.estimator);
   CalibrationModel m;
   m.nominal = nominal;
   m.nominal.source_errors.resize(0);
   m.data_file = data_file;
   const HybridCompensation c = cal.compensation(estimator);
   const HybridErrorModel& em = *c.model;
-  const Estimate* est = nullptr;
-  if (cal.fine_done && estimator != HybridFineEstimator::None)
-    est = estimator == HybridFineEstimator::Liu ? &cal.liu : &cal.ols;
-  m.estimator =
-      estimator == HybridFineEstimator::Ols ? "ols" : (estimator == HybridFineEstimator::Liu ? "liu" : "coarse-ols");
+  const Estimate* est = cal.estimate(estimator);
+  m.estimator = to_string(estimator);
   auto se = [&](std::size_t column) {
     return est != nullptr && est->standard_error.size() > static_cast<Index>(column)
                ? est->standard_error(static_cast<Index>(column))
@@ -382,12 +558,14 @@ CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal
     }
     for (const std::string& name : cal.dropped_names) m.parameters.push_back({name, 0.0, 0.0, false});
   }
-  if (est != nullptr && estimator == HybridFineEstimator::Liu) m.settings["liu_d"] = est->liu_d;
+  if (est != nullptr) m.settings = estimator_settings(*est, fine_options(cal.options, estimator));
   m.settings["eps_xi"] = cal.coarse_history.empty() ? 0.0 : cal.coarse_history.back().relative_change;
   m.settings["coarse_iterations"] = static_cast<double>(cal.coarse_history.size());
+  m.settings["coarse_nodes"] = static_cast<double>(cal.coarse_ids.size());
   m.settings["rank"] = static_cast<double>(cal.rank);
   m.settings["condition_number"] = cal.condition_number;
   m.settings["cal_nodes"] = static_cast<double>(cal.cal_nodes);
+  if (cal.options.scale_columns) m.settings["scale_columns"] = 1;
   return m;
 }
 

@@ -298,6 +298,159 @@ std::vector<Index> unidentifiable_columns(const Eigen::MatrixXd& H, double rcond
   return unidentifiable_from(scaled_svd(H, rcond, ColumnScaling::UnitNorm, true));
 }
 
+const char* to_string(PoseDof dof) {
+  static const char* const kNames[6] = {"x", "y", "z", "rx", "ry", "rz"};
+  const int k = static_cast<int>(dof);
+  return k >= 0 && k < 6 ? kNames[k] : "?";
+}
+
+namespace {
+
+using Pose6 = Eigen::Matrix<double, 6, 1>;
+
+// The design rows of every measured pose moved by `shift`, stacked.
+MatrixXd probe_design(const std::vector<Pose6>& poses, const PoseDesignRows& rows, const Pose6& shift, Index cols) {
+  std::vector<MatrixXd> blocks;
+  Index total = 0;
+  for (const Pose6& p : poses) {
+    MatrixXd b = rows(p + shift);
+    if (b.size() == 0) continue;
+    if (b.cols() != cols || !b.allFinite()) {
+      throw std::invalid_argument("identifiability hint: the design rows at a pose have " + std::to_string(b.cols()) +
+                                  " columns (or non-finite entries) for " + std::to_string(cols) + " parameters");
+    }
+    total += b.rows();
+    blocks.push_back(std::move(b));
+  }
+  MatrixXd H(total, cols);
+  Index at = 0;
+  for (const MatrixXd& b : blocks) {
+    H.middleRows(at, b.rows()) = b;
+    at += b.rows();
+  }
+  return H;
+}
+
+// ‖H·v‖ / ‖D·v‖, D the column norms of the design at the measured poses (as
+// null_space_combinations scaled it): how far the unit-scaled combination is
+// from the null space of H. D is not the probe's own: a column that is zero
+// at the measured poses (a leg in a coordinate plane) but not at the probe
+// would otherwise look invisible after rescaling.
+double visibility(const MatrixXd& H, const NullCombination& c, const VectorXd& D) {
+  if (H.rows() == 0) return 0.0;
+  VectorXd v = VectorXd::Zero(H.cols());
+  for (std::size_t t = 0; t < c.columns.size(); ++t) v(c.columns[t]) = c.coefficients[t];
+  const double den = D.cwiseProduct(v).norm();
+  return den > 0 ? (H * v).norm() / den : 0.0;
+}
+
+std::string join_dofs(const std::vector<PoseDof>& dofs) {
+  std::string out;
+  for (PoseDof d : dofs) out += (out.empty() ? "" : ", ") + std::string(to_string(d));
+  return out;
+}
+
+// What to measure, from the degrees of freedom that reveal a combination.
+std::string measurement_phrase(const std::vector<PoseDof>& dofs, bool jointly) {
+  std::vector<PoseDof> t, r;
+  for (PoseDof d : dofs) (static_cast<int>(d) < 3 ? t : r).push_back(d);
+  std::string pos, ori;
+  if (t.size() == 1 && t.front() == PoseDof::Z) {
+    pos = "add poses at another height (z), e.g. another layer";
+  } else if (!t.empty()) {
+    pos = "spread the positions (" + join_dofs(t) + ")";
+  }
+  const bool tilt_only = std::find(r.begin(), r.end(), PoseDof::Rz) == r.end();
+  if (!r.empty()) ori = std::string(tilt_only ? "add tilted poses (" : "add poses with different orientations (") +
+                        join_dofs(r) + ")";
+  if (!pos.empty() && !ori.empty()) return pos + " or " + ori;
+  if (!pos.empty()) return pos;
+  if (!ori.empty()) return ori;
+  if (jointly) return "move position and orientation together (no single degree of freedom separates them)";
+  return "no change of pose separates them (a redundancy of the model: hold one at its nominal value or measure it "
+         "directly)";
+}
+
+}  // namespace
+
+IdentifiabilityHint identifiability_hint(const std::vector<NullCombination>& null_space,
+                                         const std::vector<std::string>& names, const std::vector<Pose6>& poses,
+                                         const PoseDesignRows& rows, const HintOptions& options) {
+  IdentifiabilityHint out;
+  if (null_space.empty()) return out;
+  if (!rows) throw std::invalid_argument("identifiability hint: no design-rows function");
+  if (!(options.translation_step > 0) || !(options.rotation_step > 0) || !(options.visible > 0) ||
+      !(options.ratio >= 1)) {
+    throw std::invalid_argument("identifiability hint: steps and the visibility threshold must be > 0, ratio >= 1");
+  }
+  Index cols = 0;
+  for (const NullCombination& c : null_space)
+    for (Index j : c.columns) cols = std::max(cols, j + 1);
+  cols = std::max(cols, static_cast<Index>(names.size()));
+  auto step = [&](int dof) { return dof < 3 ? options.translation_step : options.rotation_step; };
+  // The measured poses themselves: the baseline the probes must clearly exceed.
+  const MatrixXd H0 = probe_design(poses, rows, Pose6::Zero(), cols);
+  const VectorXd D = column_scales(H0);
+  std::vector<MatrixXd> probes;
+  for (int dof = 0; dof < 6; ++dof) probes.push_back(probe_design(poses, rows, step(dof) * Pose6::Unit(dof), cols));
+  Pose6 all;
+  for (int dof = 0; dof < 6; ++dof) all(dof) = step(dof);
+  const MatrixXd joint = probe_design(poses, rows, all, cols);
+
+  std::vector<char> involved(static_cast<std::size_t>(cols), 0);
+  for (const NullCombination& c : null_space) {
+    CombinationHint h;
+    h.combination = c;
+    // Well above what the measured poses show: rounding for an exact null
+    // combination, the small singular value for a near-null one (a rank
+    // tolerance above rounding).
+    const double threshold = std::max(options.visible, options.ratio * visibility(H0, c, D));
+    for (int dof = 0; dof < 6; ++dof)
+      if (visibility(probes[static_cast<std::size_t>(dof)], c, D) > threshold) h.revealed_by.push_back(PoseDof(dof));
+    h.revealed_jointly = h.revealed_by.empty() && visibility(joint, c, D) > threshold;
+    h.measurement = measurement_phrase(h.revealed_by, h.revealed_jointly);
+    for (Index j : c.columns) involved[static_cast<std::size_t>(j)] = 1;
+    out.combinations.push_back(std::move(h));
+  }
+  for (Index j = 0; j < cols; ++j)
+    if (involved[static_cast<std::size_t>(j)]) out.parameters.push_back(name_of(names, j));
+
+  // Group the combinations by the measurement that separates them, in order of
+  // first appearance; list each group's parameters once.
+  std::vector<std::string> phrases;
+  std::vector<std::vector<char>> members;
+  for (const CombinationHint& h : out.combinations) {
+    auto it = std::find(phrases.begin(), phrases.end(), h.measurement);
+    if (it == phrases.end()) {
+      phrases.push_back(h.measurement);
+      members.emplace_back(static_cast<std::size_t>(cols), 0);
+      it = phrases.end() - 1;
+    }
+    std::vector<char>& m = members[static_cast<std::size_t>(it - phrases.begin())];
+    for (Index j : h.combination.columns) {
+      m[static_cast<std::size_t>(j)] = 1;
+      if (options.leading_only) break;
+    }
+  }
+  std::string text;
+  for (std::size_t g = 0; g < phrases.size(); ++g) {
+    std::string list;
+    std::size_t count = 0, listed = 0;
+    for (Index j = 0; j < cols; ++j) {
+      if (!members[g][static_cast<std::size_t>(j)]) continue;
+      ++count;
+      if (listed < options.max_names) {
+        list += (list.empty() ? "" : ", ") + name_of(names, j);
+        ++listed;
+      }
+    }
+    if (count > listed) list += " (+" + std::to_string(count - listed) + " more)";
+    text += (text.empty() ? "" : "; ") + list + ": " + phrases[g];
+  }
+  out.text = text;
+  return out;
+}
+
 CollinearityReport collinearity_report(const Eigen::MatrixXd& H, const std::vector<std::string>& names,
                                        const CollinearityOptions& options) {
   check_design(H, "collinearity");

@@ -82,8 +82,35 @@ constexpr double kOrientationWeightMm = 200.0;
 
 }  // namespace
 
+namespace {
+
+// A rank-deficient design: name the parameters, the null-space combinations,
+// and the poses that would separate them (identifiability_hint probes the
+// error Jacobian at the measured poses moved along each degree of freedom).
+[[noreturn]] void throw_rank_deficient(const PoseTable& data, const std::vector<Eigen::Matrix<double, 6, 1>>& poses,
+                                       const StewartGeometry<double>& g, const Eigen::MatrixXd& H,
+                                       const std::vector<std::string>& names, Eigen::Index rank) {
+  std::string which;
+  for (const Eigen::Index j : unidentifiable_columns(H)) which += (which.empty() ? "" : ", ") + names[std::size_t(j)];
+  const PoseDesignRows rows = [&g](const Eigen::Matrix<double, 6, 1>& pose) -> Eigen::MatrixXd {
+    Eigen::MatrixXd E = stewart_error_jacobian(g, Pose<double>::from_xyz_rpy(pose));
+    E.bottomRows<3>() *= kOrientationWeightMm;
+    if (!E.allFinite()) return {};
+    return E;
+  };
+  const IdentifiabilityHint hint = identifiability_hint(null_space_combinations(H, names), names, poses, rows);
+  throw InputError(data.file, 0, 0,
+                   "the calibration poses do not determine all 42 parameters (rank " + std::to_string(rank) +
+                       "); not identifiable: " + which + ". To separate them: " + hint.text);
+}
+
+}  // namespace
+
 StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data, const StewartCalibrationOptions& options) {
   if (!nominal.is_stewart()) throw InputError("the seed 001 calibration is for 6-UPS (stewart-6ups) robots");
+  if (options.estimator.kind == EstimatorKind::Liu)
+    throw InputError("the 6-UPS calibration (seed 001) offers the estimators ols, ridge and pcr; liu is seed 000's "
+                     "estimator for the hybrid's fine stage");
   const std::vector<Node> nodes = calibration_nodes(nominal, data);
   const int m = kStewartParameterCount;
   const Eigen::Index n = Eigen::Index(6 * nodes.size());
@@ -91,6 +118,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
 
   StewartCalibration out;
   out.nodes = nodes.size();
+  out.estimator = options.estimator;
   out.theta = Eigen::VectorXd::Zero(m);
   Eigen::MatrixXd H(n, m);
   Eigen::VectorXd y(n);
@@ -102,6 +130,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     StewartIteration rec;
     rec.iteration = it;
     double sum_p2 = 0;
+    std::vector<Eigen::Matrix<double, 6, 1>> at;  // where E was evaluated (for a rank-deficiency hint)
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       Pose<double> predicted;
       const FkReport<double> r = stewart_fk(g, nodes[k].q, nodes[k].measured, predicted);
@@ -111,6 +140,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
       const Twist<double> dq = pose_error(nodes[k].measured, predicted);
       const Eigen::Index row = Eigen::Index(6 * k);
       H.middleRows<6>(row) = stewart_error_jacobian(g, predicted);
+      at.push_back(predicted.to_xyz_rpy());
       y.segment<6>(row) = dq;
       H.middleRows<3>(row + 3) *= kOrientationWeightMm;
       y.segment<3>(row + 3) *= kOrientationWeightMm;
@@ -119,35 +149,33 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     }
     rec.rms_position_mm = std::sqrt(sum_p2 / double(nodes.size()));
     if (it > 0) rec.step_norm = out.history.back().step_norm;
-    // Step 5: LS (identify/estimators: SVD, rank judged on the column-scaled
-    // design; never normal equations).
+    // Step 5: the linear estimate (identify/estimators: SVD, rank judged on
+    // the column-scaled design; never normal equations). Linearised at θ, the
+    // measured pose error relative to the nominal machine is dQ + E·θ ≈ E·θ_true,
+    // so the estimator is applied to that total: OLS gives θ + Δθ_OLS, seed
+    // 001's correction, exactly; ridge and PCR shrink (resp. truncate) θ
+    // itself. Applied to the step Δθ instead they would only damp the
+    // iteration, which would still converge to the OLS solution.
     LinearProblem problem;
     problem.H = H;
-    problem.y = y;
+    problem.y = y + H * out.theta;
     problem.names = names;
     problem.row_node.resize(std::size_t(n));
     for (Eigen::Index r = 0; r < n; ++r) problem.row_node[std::size_t(r)] = r / 6;
     const RankReport rank = rank_by_svd(H);
-    if (rank.rank < m) {
-      std::string which;
-      for (const Eigen::Index j : unidentifiable_columns(H))
-        which += (which.empty() ? "" : ", ") + names[std::size_t(j)];
-      throw InputError(data.file, 0, 0,
-                       "the calibration poses do not determine all 42 parameters (rank " + std::to_string(rank.rank) +
-                           "); not identifiable: " + which +
-                           ". Spread the poses over more positions and orientations of the workspace");
-    }
-    const Estimate estimate = ols(problem);
-    const Eigen::VectorXd& delta = estimate.x;
-    out.sigma_mm = std::sqrt(estimate.sigma2_unbiased);
+    if (rank.rank < m) throw_rank_deficient(data, at, g, H, names, rank.rank);
+    out.fit = estimate(problem, options.estimator);
+    const Eigen::VectorXd delta = out.fit.x - out.theta;
+    out.sigma_mm = std::sqrt(out.fit.sigma2_unbiased);
     out.rank = int(rank.rank);
     out.condition_number = rank.condition_number;
-    out.standard_error = estimate.standard_error;
+    out.standard_error = out.fit.standard_error;
+    problem.y = y;  // the outlier test below is on the residuals at the solution
     last_problem = std::move(problem);
     rec.step_norm = delta.norm();
     out.history.push_back(rec);
     // Step 6 / 10: correct and repeat until the correction is negligible.
-    out.theta += delta;
+    out.theta = out.fit.x;
     if (delta.norm() <= options.step_tolerance * (1 + out.theta.norm()) || it + 1 >= options.max_iterations) break;
   }
   // Nodes inconsistent with the others (a mis-seated reflector, a mistyped
@@ -169,9 +197,7 @@ StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTabl
   PoseTable rest = data;
   out.rest = calibrate_stewart(nominal, rest, options);
   while (!out.rest.outliers.empty() && out.rest.nodes > 8) {
-    const NodeTest* worst = nullptr;
-    for (const NodeTest& t : out.rest.node_tests)
-      if (t.outlying && (worst == nullptr || t.p_value < worst->p_value)) worst = &t;
+    const NodeTest* worst = most_significant_outlier(out.rest.node_tests);
     out.removed.push_back(*worst);
     const std::string id = worst->id;
     rest.rows.erase(std::find_if(rest.rows.begin(), rest.rows.end(), [&](const PoseRow& r) { return r.id == id; }));
@@ -204,7 +230,8 @@ PoseErrorReport stewart_residuals(const Robot& nominal, const Robot& robot, cons
 CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& c, const std::string& data_file) {
   CalibrationModel model;
   model.nominal = nominal;
-  model.estimator = "ols";
+  model.estimator = to_string(c.estimator.kind);
+  model.settings = estimator_settings(c.fit, c.estimator);
   model.settings["iterations"] = double(c.history.size());
   model.settings["orientation_weight_mm"] = kOrientationWeightMm;
   model.data_file = data_file;

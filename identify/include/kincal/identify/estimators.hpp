@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,12 +80,29 @@ struct LiuOptions {
   double d = 0.5;  // used by LiuRule::Fixed; must be finite
 };
 
+// How ridge's k is chosen (RidgeOptions; the calibrations default to GCV).
+enum class RidgeRule {
+  Gcv,                  // minimum of generalized cross-validation (Golub, Heath & Wahba 1979)
+  HoerlKennardBaldwin,  // k = m·σ̂²_u / ‖x̂_OLS‖² (Hoerl, Kennard & Baldwin 1975); needs full rank
+  Fixed,                // the caller's k (≥ 0; 0 is OLS)
+};
+
+struct RidgeOptions {
+  RidgeRule rule = RidgeRule::Gcv;
+  double k = 0;  // used by RidgeRule::Fixed
+};
+
 struct PcrOptions {
   // Precedence: components > 0; else variance_fraction in (0, 1]; else
-  // the condition-index cut (keep s_j ≥ s_max / max_condition_index).
+  // by_gcv; else the condition-index cut (keep s_j ≥ s_max / max_condition_index).
   Eigen::Index components = 0;
   double variance_fraction = 0.0;  // fraction of Σ s_j² to retain
   double max_condition_index = 1e3;
+  // The number of leading components minimising generalized cross-validation
+  // of the truncated SVD, n·RSS_k / (n − k)² (Golub, Heath & Wahba 1979;
+  // Hansen, "Rank-Deficient and Discrete Ill-Posed Problems", 1998): uses y,
+  // so it adapts to the noise; on noise-free data it keeps every component.
+  bool by_gcv = false;
 };
 
 struct Estimate {
@@ -109,6 +127,7 @@ struct Estimate {
   // settings actually used
   double ridge_k = 0;
   bool ridge_k_default = false;     // k chosen by Hoerl–Kennard–Baldwin
+  RidgeRule ridge_rule = RidgeRule::Fixed;
   double liu_d = 1;
   double liu_d_unclamped = 1;       // Eq. (14) value before clamping to [0, 1]
   bool liu_d_clamped = false;
@@ -152,6 +171,46 @@ double liu_d_eq14(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_ha
 // Golden-section minimum of liu_mse_eq13 over [lo, hi] (to ~1e-10 relative).
 double liu_d_minimise_mse(const Eigen::VectorXd& lambda, const Eigen::VectorXd& alpha_hat, double sigma2,
                           double lo = 0.0, double hi = 1.0);
+
+// Generalized cross-validation of ridge at k (Golub, Heath & Wahba 1979) on
+// the whitened problem, from the SVD filter factors f_j = λ_j/(λ_j + k):
+//   GCV(k) = n·RSS(k) / (n − Σ_j f_j)²,   RSS(k) = RSS_OLS + Σ_j (1 − f_j)² c_j²,
+// the leave-one-out prediction error made rotation-invariant. Works on a
+// rank-deficient design (the sums run over the rank).
+double ridge_gcv(const LinearProblem& problem, double k, double rcond = kDefaultRcond);
+
+// k by options.rule. Gcv: the minimum of ridge_gcv over k ≥ 0 (a log-spaced
+// grid over [λ_min·1e-6, λ_max·1e2] refined by golden section, compared with
+// k = 0; k = 0 when OLS is at least as good, e.g. on noise-free data).
+double ridge_parameter(const LinearProblem& problem, const RidgeOptions& options, double rcond = kDefaultRcond);
+
+// ---- one entry point for the four estimators --------------------------------
+
+enum class EstimatorKind { Ols, Ridge, Pcr, Liu };
+const char* to_string(EstimatorKind kind);               // "ols", "ridge", "pcr", "liu"
+EstimatorKind parse_estimator(const std::string& name);  // InputError for any other name
+
+// Defaults are the data-driven choices the calibrations use: ridge's k and
+// PCR's number of components by GCV, Liu's d by seed 000 Eq. (14).
+struct EstimatorOptions {
+  EstimatorKind kind = EstimatorKind::Ols;
+  RidgeOptions ridge;                                // used by kind Ridge (k by GCV)
+  PcrOptions pcr = PcrOptions{0, 0.0, 1e3, true};    // used by kind Pcr (components by GCV)
+  LiuOptions liu;                                    // used by kind Liu (d by Eq. (14))
+};
+
+// ols / ridge / principal_components / liu by options.kind (ridge's k by
+// options.ridge.rule). OLS, Liu and ridge with k = 0 or the HKB rule need a
+// full-rank design (InputError naming the null space otherwise).
+Estimate estimate(const LinearProblem& problem, const EstimatorOptions& options, double rcond = kDefaultRcond);
+
+// The settings an estimate was made with, as MODEL.json numbers:
+//   ridge: ridge_k, and ridge_k_gcv = 1 or ridge_k_hkb = 1 when k was chosen by that rule;
+//   pcr:   pcr_components, and pcr_components_gcv = 1, pcr_max_condition_index or
+//          pcr_variance_fraction when the number came from that rule;
+//   liu:   liu_d, liu_d_unclamped, and liu_d_fixed = 1 / liu_d_min_mse = 1 for those rules;
+//   ols:   nothing.
+std::map<std::string, double> estimator_settings(const Estimate& estimate, const EstimatorOptions& options);
 
 // ---- factor once, solve many (Monte Carlo) --------------------------------
 
@@ -204,8 +263,15 @@ class PreparedDesign {
                 std::optional<double> k = std::nullopt) const;
   // PCR with the first `components` (≤ rank) principal components.
   FitInfo pcr(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWorkspace& ws, Eigen::Index components) const;
-  // Number of components PcrOptions selects on this design.
+  // Number of components PcrOptions selects on this design (by_gcv is
+  // ignored here: it needs y, see pcr_components_gcv).
   Eigen::Index pcr_components(const PcrOptions& options) const;
+  // The number of leading components minimising n·RSS_k / (n − k)² for data y.
+  Eigen::Index pcr_components_gcv(const Eigen::VectorXd& y, FitWorkspace& ws) const;
+  // Generalized cross-validation of ridge at k for data y, and its minimiser
+  // over k ≥ 0 (see ridge_gcv / ridge_parameter).
+  double ridge_gcv(const Eigen::VectorXd& y, FitWorkspace& ws, double k) const;
+  double ridge_k_gcv(const Eigen::VectorXd& y, FitWorkspace& ws) const;
 
   // √(σ² · [V diag(f_j²/s_j²) Vᵀ]_jj) for filter factors f (size ≥ rank; entries
   // beyond rank ignored).
@@ -224,6 +290,11 @@ class PreparedDesign {
   std::vector<std::string> names_;
   std::string deficiency_;
 };
+
+// The one-shot estimate of `problem` (its y; H, weights and names as the
+// design was prepared from) on an existing factorisation: several estimators
+// on one design cost one SVD.
+Estimate estimate(const PreparedDesign& design, const LinearProblem& problem, const EstimatorOptions& options);
 
 // ---- outliers --------------------------------------------------------------
 
@@ -259,6 +330,19 @@ struct OutlierReport {
 // Fits OLS on the whitened problem (full rank required) and tests each node.
 OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options = {},
                               double rcond = kDefaultRcond);
+
+// A node's test in terms of the measurement file (calibrations report these):
+// its id and line, the deleted-node F statistic and p-value.
+struct NodeTest {
+  std::string id;
+  std::size_t line = 0;
+  double f = 0, p_value = 1;  // deleted-node F statistic and its p-value
+  bool testable = true, outlying = false;
+};
+
+// The most significant outlying test (smallest p-value; ties, e.g. p-values
+// that underflow to 0, by the larger F), or null when none is outlying.
+const NodeTest* most_significant_outlier(const std::vector<NodeTest>& tests);
 
 // The problem without the rows of `nodes` (node ids of row_node, or row
 // indices when row_node is empty). Weights and row_node are carried along.

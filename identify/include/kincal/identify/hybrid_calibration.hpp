@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,11 +21,16 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
+
+// Which fine-stage estimate: None = the coarse encoder offsets only.
+enum class HybridFineEstimator { None, Ols, Liu, Ridge, Pcr };
+const char* to_string(HybridFineEstimator estimator);  // "coarse-ols", "ols", "liu", "ridge", "pcr"
 
 struct HybridCalibrationOptions {
   // Eq. (15) stop rule, read as "relative change between two successive
@@ -42,6 +48,22 @@ struct HybridCalibrationOptions {
   // only at 1e-6..1e-8 are identifiable in exact arithmetic but turn 5 µm of
   // gauge noise into millimetre-sized estimates (docs/hybrid-calibration.md).
   double selection_tolerance = 1e-4;
+  // The fine estimator the calibration's model and compensation use (MODEL.json
+  // "estimator"). All four are computed from one SVD of the fine design, so any
+  // of them can still be compared (compensation(estimator)).
+  // None (coarse only, as fine = false) is not a choice here.
+  HybridFineEstimator estimator = HybridFineEstimator::Liu;
+  RidgeOptions ridge;                              // ridge's k: GCV by default
+  PcrOptions pcr = PcrOptions{0, 0.0, 1e3, true};  // PCR's number of components: GCV by default
+  // The coarse stage's nodes. Seed 000 Sec. 4.3: "the number of calibration
+  // nodes required for coarse calibration is much fewer than is required in
+  // the fine calibration", and Sec. 5 runs it on the 5 × 5 middle layer (the
+  // fine stage's test layer). Non-empty: the rows with gauge targets in these
+  // layers, whatever their role (a test layer used here stays held out from
+  // the fine stage, not from the encoder offsets). Empty: the cal rows.
+  std::vector<long long> coarse_layers;
+  // Deleted-node F test of each cal node on the fine design (node_tests, outliers).
+  bool test_nodes = true;
 };
 
 struct HybridCoarseIteration {
@@ -63,15 +85,16 @@ struct HybridCompensation {
   HybridGeometry<double> controller_geometry() const;
 };
 
-enum class HybridFineEstimator { None, Ols, Liu };
-
 struct HybridCalibration {
   HybridGeometry<double> nominal;
+  HybridCalibrationOptions options;  // as asked (options.estimator: the model's estimator)
   double gauge_radius = 0;
   std::size_t cal_nodes = 0;
   std::vector<std::string> cal_ids;  // the cal nodes in fit order (node k of fine_problem.row_node)
 
   // coarse (Eq. (15))
+  std::vector<std::string> coarse_ids;  // its nodes (= cal_ids unless options.coarse_layers)
+  std::size_t coarse_test_rows = 0;     // how many of them are `test` rows
   Vec6<double> coarse_xi = Vec6<double>::Zero();
   std::vector<HybridCoarseIteration> coarse_history;
   bool coarse_converged = false;
@@ -83,26 +106,67 @@ struct HybridCalibration {
   Eigen::Index rank = 0;
   double condition_number = 0;   // column-scaled reconstructed H
   LinearProblem fine_problem;    // H (kept columns, divided by column_scale) and y (gauge residuals)
+  std::vector<Eigen::Matrix<double, 6, 1>> fine_poses;  // per cal node, the pose H was linearised at (x..rz)
   Eigen::VectorXd column_scale;  // D (ones unless scale_columns)
-  Estimate liu, ols;
-  Eigen::VectorXd chi_liu, chi_ols;  // 150 each, zeros where dropped
+  Estimate liu, ols, ridge, pcr;     // all four from one SVD of fine_problem (x already divided by column_scale)
+  Eigen::VectorXd chi_liu, chi_ols, chi_ridge, chi_pcr;  // 150 each, zeros where dropped
 
-  // Total encoder offsets ξ̂ + Δξ̂ (fine) and the structural part, for an estimator.
-  HybridCompensation compensation(HybridFineEstimator estimator = HybridFineEstimator::Liu) const;
+  // cal nodes inconsistent with the others: deleted-node F test (OLS on the
+  // fine design, Bonferroni over the nodes, α = 0.01); reported, not excluded.
+  std::vector<NodeTest> node_tests;
+  std::vector<std::string> outliers;
+  double outlier_p_threshold = 0;
+
+  // The fine estimate of an estimator (null for None or without a fine stage),
+  // and its 150 Δχ̂ (zeros for None / no fine stage).
+  const Estimate* estimate(HybridFineEstimator estimator) const;
+  Eigen::VectorXd chi(HybridFineEstimator estimator) const;
+  // Total encoder offsets ξ̂ + Δξ̂ (fine) and the structural part, for an
+  // estimator (default: options.estimator).
+  HybridCompensation compensation(std::optional<HybridFineEstimator> estimator = std::nullopt) const;
 };
 
 // Coarse + fine calibration on the `cal` rows of `data` that carry gauge
-// targets (t1..t3) and no failure status; commands are the row's q1..q6 or the
+// targets (t1..t3) and no failure status (the coarse stage on
+// options.coarse_layers' rows if given); commands are the row's q1..q6 or the
 // nominal IK of the commanded pose. Throws InputError (non-hybrid robot, too
 // few usable rows, IK/FK failure at a node, rank-deficient H_ξ).
 HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
                                    const HybridCalibrationOptions& options = {});
+
+// Which cal nodes are inconsistent with the others, sequentially (as
+// stewart_outlier_search): the most significant outlier of calibrate_hybrid
+// is set aside, coarse + fine refitted without it and the rest tested again,
+// until no node is flagged. `removed` in the order found, each with its
+// statistic at that step; `rest` is the calibration without them. If nodes
+// are still flagged after a tenth of the cal nodes is set aside, the search
+// stops with `systematic`: the misfit is not a few bad nodes but the model
+// (an unmodelled effect) or noise-free data (the F test assumes noise), and
+// excluding nodes would hide it.
+struct HybridOutlierSearch {
+  std::vector<NodeTest> removed;
+  HybridCalibration rest;
+  bool systematic = false;
+};
+HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data,
+                                          const HybridCalibrationOptions& options = {});
 
 // Eq. (16): $_t = B(requested)·Δχ̂, corrected = apply_twist(requested, −$_t),
 // q = ideal IK of the corrected pose on controller_geometry(). Returns the IK
 // (or B) status; q is written only on Ok.
 Status compensate_hybrid(const HybridCompensation& compensation, const Pose<double>& requested, Vec6<double>& q);
 Status compensate_hybrid(const HybridCalibration& calibration, const Pose<double>& requested, Vec6<double>& q);
+
+// What would make the source errors the fine stage drops identifiable:
+// identifiability_hint on the fine design over all 150 errors at the cal
+// nodes' poses, its null space taken to the reconstruction's tolerance
+// (options.selection_tolerance as a singular value of the unit-column design),
+// so the near-dependent columns the reconstruction drops are in it as well as
+// the exact redundancies. Seed 000's pure-translation layers, for example,
+// leave errors that only tilted poses separate. Empty when there is no fine
+// stage.
+IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const HybridCalibration& calibration,
+                                                const HintOptions& options = {});
 
 // ---- evaluation (seed 000 Table 5) ------------------------------------------
 
@@ -152,10 +216,12 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
 
 // Parameters by HybridErrorModel names: dxi_* = total encoder offsets
 // (coarse + fine), then the kept structural errors (fine), then the dropped
-// ones (identifiable = false, value 0). estimator "liu" (or "ols"); settings
-// liu_d, eps_xi, coarse_iterations, rank, condition_number.
+// ones (identifiable = false, value 0). estimator: to_string(estimator), by
+// default the calibration's options.estimator; settings: the estimator's
+// (estimator_settings: liu_d, ridge_k, pcr_components, ...) and eps_xi,
+// coarse_iterations, coarse_nodes, rank, condition_number, cal_nodes.
 CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& calibration,
-                              HybridFineEstimator estimator = HybridFineEstimator::Liu,
+                              std::optional<HybridFineEstimator> estimator = std::nullopt,
                               const std::string& data_file = {});
 // Rebuilds the compensation from a model: dxi_* (and the older joint-offset
 // names dq1..dq3, dtheta4..dtheta6) → encoder offsets, any other

@@ -119,6 +119,74 @@ std::vector<NullCombination> null_space_combinations(const Eigen::MatrixXd& H,
 // 1e-7 of the scaled null basis N): the parameters that are not identifiable.
 std::vector<Eigen::Index> unidentifiable_columns(const Eigen::MatrixXd& H, double rcond = kDefaultRcond);
 
+// ---- what measurement would make it identifiable ----------------------------
+
+// The physics of a null-space combination v (H·v = 0 on the measured poses):
+// the design rows of the same measurements at poses moved along one degree
+// of freedom show whether v stays invisible. If moving the orientation makes
+// H·v ≠ 0 but moving the position does not, v is a combination only a change
+// of orientation separates (e.g. a base hinge offset and the platform hinge
+// offset that, at one orientation, shifts the leg end by the same vector), so
+// the hint is "add poses with different orientations"; if only a change of
+// height reveals it, "add poses at another height (another layer)".
+
+// One measurement's design rows at a pose (x, y, z mm; rx, ry, rz rad, as in
+// the measurement CSV), in the design's units and column order. An empty
+// matrix means the pose cannot be evaluated (it is skipped).
+using PoseDesignRows = std::function<Eigen::MatrixXd(const Eigen::Matrix<double, 6, 1>& pose)>;
+
+struct HintOptions {
+  // The probe's moves. An exact null combination is revealed by any nonzero
+  // step or by none; a near-null one (a rank tolerance above rounding, e.g.
+  // the hybrid's dropped columns) shows up in proportion to the step, so the
+  // steps are a clear tilt and shift rather than infinitesimal. On seed 000's
+  // pure-translation design (72 near-null combinations) a tilt of 0.05 rad
+  // lifts 57 of them above 2 × their baseline, 0.2 rad all 72, while moves
+  // of x, y, z or rx lift 2 (docs/estimators.md).
+  double translation_step = 50.0;  // mm, along x, y, z
+  double rotation_step = 0.2;      // rad (≈ 11°), about x, y, z
+  // A combination v counts as revealed by a probe when ‖H_probe·v‖ / ‖D·v‖
+  // (D the column norms of the design at the measured poses, so the measure
+  // is unit-free and ≤ √m) exceeds `visible` and `ratio` × its value at the
+  // measured poses (~1e-15 for an exact null combination; about the small
+  // singular value for a near-null one).
+  double visible = 1e-6;
+  double ratio = 2.0;
+  std::size_t max_names = 12;  // parameters listed per group before "(+n more)"
+  // List only each combination's leading parameter (its first column) in the
+  // text, e.g. when the combinations express dropped columns through many kept ones.
+  bool leading_only = false;
+};
+
+enum class PoseDof { X = 0, Y, Z, Rx, Ry, Rz };
+const char* to_string(PoseDof dof);  // "x", "y", "z", "rx", "ry", "rz"
+
+struct CombinationHint {
+  NullCombination combination;
+  std::vector<PoseDof> revealed_by;  // single degrees of freedom whose change makes it visible
+  bool revealed_jointly = false;     // none alone, but moving all six together does
+  std::string measurement;           // e.g. "add poses with different orientations (rx, ry, rz)"
+};
+
+struct IdentifiabilityHint {
+  std::vector<CombinationHint> combinations;  // one per null-space combination, in order
+  std::vector<std::string> parameters;        // every parameter in some combination (column order)
+  std::string text;  // one line: per group of combinations, their parameters and the measurement that separates them
+};
+
+// The hint for a rank-deficient design: `null_space` (null_space_combinations
+// of the design), the parameter names (column order), the measured poses and
+// the design rows at a pose. Each combination is probed by moving all poses by
+// HintOptions' steps along each degree of freedom; combinations revealed by
+// the same degrees of freedom are grouped into one phrase, listing their
+// parameters, joined by "; ", e.g.
+//   "dXB1, dXP1, dXB2, dXP2: add poses with different orientations (ry, rz); dZB1, dZP1: add tilted poses (rx, ry)".
+// Empty text when null_space is empty.
+IdentifiabilityHint identifiability_hint(const std::vector<NullCombination>& null_space,
+                                         const std::vector<std::string>& names,
+                                         const std::vector<Eigen::Matrix<double, 6, 1>>& poses,
+                                         const PoseDesignRows& rows, const HintOptions& options = {});
+
 // ---- collinearity ----------------------------------------------------------
 
 struct CollinearityOptions {

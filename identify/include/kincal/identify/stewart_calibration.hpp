@@ -12,6 +12,7 @@
 
 #include "kincal/core/stewart.hpp"
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/pose_errors.hpp"
 
@@ -41,18 +42,20 @@ struct StewartIteration {
 struct StewartCalibrationOptions {
   int max_iterations = 20;
   double step_tolerance = 1e-9;  // stop when |Δθ| ≤ step_tolerance · (1 + |θ|)
-};
-
-struct NodeTest {
-  std::string id;
-  std::size_t line = 0;
-  double f = 0, p_value = 1;  // deleted-node F statistic and its p-value
-  bool testable = true, outlying = false;
+  // The linear step (seed 001 step 5): ols (default), ridge (k by GCV unless
+  // estimator.ridge says otherwise) or pcr (number of components by GCV unless
+  // estimator.pcr says otherwise). Each iteration estimates the total error
+  // θ from the linearisation at the current θ (see calibrate_stewart), so the
+  // biased estimators shrink θ, not the step. Liu is the hybrid's (seed 000)
+  // and is refused here.
+  EstimatorOptions estimator;
 };
 
 struct StewartCalibration {
   Eigen::VectorXd theta;            // identified errors (42)
-  Eigen::VectorXd standard_error;   // OLS standard errors at the solution
+  Eigen::VectorXd standard_error;   // the estimator's standard errors at the solution (OLS: the usual ones)
+  EstimatorOptions estimator;       // as asked
+  Estimate fit;                     // the last linear step (x = θ; ridge_k, pcr_components as used)
   std::vector<StewartIteration> history;
   int rank = 0;
   double condition_number = 0;      // of the column-scaled design
@@ -67,7 +70,8 @@ struct StewartCalibration {
 // needs a measured pose; its joint commands are the row's q1..q6 or the
 // nominal IK of its commanded pose. Throws InputError for too few nodes
 // (fewer than 7, seed 001 Section 3), missing measurements, a rank-deficient
-// design (naming the parameters), or FK failures of the corrected machine.
+// design (naming the parameters and, from identifiability_hint, the poses that
+// would separate them), or FK failures of the corrected machine.
 StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data,
                                      const StewartCalibrationOptions& options = {});
 
