@@ -9,7 +9,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -434,53 +433,122 @@ TEST(identifyEstimators, OutlierFalseAlarmRateOnCleanData) {
   EXPECT_LE(runs_with_flags, runs / 20);  // ≥ 95 % of runs clean
 }
 
-TEST(identifyEstimators, PreparedDesignTimingOn882x60) {
-  // Not a timed assertion: prints the numbers docs/estimators.md quotes.
-  std::mt19937_64 rng(15);
+TEST(identifyEstimators, RidgeKByGcvIsTheMinimumOfAnIndependentGcv) {
+  // GCV(k) = n·‖y − H x_k‖² / (n − tr A_k)², A_k = H (HᵀH + kI)⁻¹ Hᵀ, evaluated
+  // here by the augmented least squares of the ridge test above and an
+  // explicit trace (well-conditioned enough for the normal matrix).
+  std::mt19937_64 rng(41);
   LinearProblem p;
-  p.H = design_with_spectrum(882, 60, 100.0, 1e4, rng);
-  const VectorXd truth = gaussian(60, rng);
-  p.y = p.H * truth + 0.005 * gaussian(882, rng);
-  using clock = std::chrono::steady_clock;
-  auto ms = [](clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  const Index n = 60, m = 8;
+  p.H = design_with_spectrum(n, m, 10.0, 300.0, rng);
+  p.y = p.H * (0.05 * gaussian(m, rng)) + 0.02 * gaussian(n, rng);
+  auto gcv_reference = [&](double k) {
+    MatrixXd A(n + m, m);
+    A << p.H, std::sqrt(k) * MatrixXd::Identity(m, m);
+    VectorXd b = VectorXd::Zero(n + m);
+    b.head(n) = p.y;
+    const VectorXd x = A.colPivHouseholderQr().solve(b);
+    const MatrixXd G = p.H.transpose() * p.H + k * MatrixXd::Identity(m, m);
+    const double trace = (p.H * G.ldlt().solve(p.H.transpose())).trace();
+    return static_cast<double>(n) * (p.y - p.H * x).squaredNorm() / ((n - trace) * (n - trace));
+  };
+  double best_k = 0, best = gcv_reference(0);
+  for (int i = 0; i <= 400; ++i) {
+    const double k = std::pow(10.0, -8.0 + 12.0 * i / 400.0);
+    EXPECT_NEAR(ridge_gcv(p, k), gcv_reference(k), 1e-9 * gcv_reference(k));
+    if (gcv_reference(k) < best) best = gcv_reference(k), best_k = k;
+  }
+  const double k = ridge_parameter(p, RidgeOptions{RidgeRule::Gcv, 0});
+  std::printf("GCV: k = %.4g (grid %.4g), GCV %.6g (grid %.6g)\n", k, best_k, ridge_gcv(p, k), best);
+  EXPECT_GT(k, 0.0);
+  EXPECT_LE(ridge_gcv(p, k), best * (1 + 1e-9));
+  EXPECT_NEAR(std::log10(k), std::log10(best_k), 0.05);
+  // The estimate at that k is the ridge estimate at that k.
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Ridge;
+  const Estimate e = estimate(p, o);
+  EXPECT_EQ(e.ridge_k, k);
+  EXPECT_EQ(e.ridge_rule, RidgeRule::Gcv);
+  EXPECT_LT((e.x - ridge(p, k).x).norm(), 1e-12 * e.x.norm());
+  // Without noise OLS cross-validates best: k = 0.
+  LinearProblem exact = p;
+  exact.y = p.H * gaussian(m, rng);
+  EXPECT_EQ(ridge_parameter(exact, RidgeOptions{}), 0.0);
+  // The other rules.
+  EXPECT_EQ(ridge_parameter(p, RidgeOptions{RidgeRule::Fixed, 0.25}), 0.25);
+  EXPECT_NEAR(ridge_parameter(p, RidgeOptions{RidgeRule::HoerlKennardBaldwin, 0}), ridge(p).ridge_k, 1e-15);
+  EXPECT_THROW(ridge_parameter(p, RidgeOptions{RidgeRule::Fixed, -1}), InputError);
+}
 
-  auto t0 = clock::now();
+TEST(identifyEstimators, PcrComponentsByGcvFollowTheNoise) {
+  // Truncated SVD with GCV(k) = n·RSS_k / (n − k)²: components whose signal
+  // is below the noise are dropped; noise-free, all are kept.
+  std::mt19937_64 rng(42);
+  LinearProblem p;
+  const Index n = 80, m = 10;
+  p.H = design_with_spectrum(n, m, 10.0, 1e4, rng);
+  const VectorXd x = gaussian(m, rng);
+  p.y = p.H * x;
+  EstimatorOptions o;
+  o.kind = EstimatorKind::Pcr;  // EstimatorOptions' default PCR rule is GCV
+  EXPECT_TRUE(o.pcr.by_gcv);
+  EXPECT_EQ(estimate(p, o).pcr_components, m);
+  p.y += 0.01 * gaussian(n, rng);
+  const Estimate e = estimate(p, o);
+  // Brute force over k of the same criterion with RSS from explicit truncated fits.
+  Index best_k = 0;
+  double best = INFINITY;
+  for (Index k = 1; k <= m; ++k) {
+    const Estimate t = principal_components(p, PcrOptions{k, 0, 0});
+    const double dof = static_cast<double>(n - k);
+    const double g = static_cast<double>(n) * t.residual.squaredNorm() / (dof * dof);
+    if (g < best) best = g, best_k = k;
+  }
+  std::printf("PCR by GCV: %lld of %lld components\n", static_cast<long long>(e.pcr_components),
+              static_cast<long long>(m));
+  EXPECT_EQ(e.pcr_components, best_k);
+  EXPECT_LT(e.pcr_components, m);
+  EXPECT_LT((e.x - principal_components(p, PcrOptions{best_k, 0, 0}).x).norm(), 1e-12 * e.x.norm());
+  // An explicit count and the one-shot default (condition index) are unchanged.
+  o.pcr = PcrOptions{4, 0, 0};
+  EXPECT_EQ(estimate(p, o).pcr_components, 4);
+  EXPECT_FALSE(PcrOptions{}.by_gcv);
+}
+
+TEST(identifyEstimators, OneEntryPointAndSettings) {
+  std::mt19937_64 rng(43);
+  LinearProblem p;
+  p.H = design_with_spectrum(50, 5, 2.0, 100.0, rng);
+  p.y = p.H * gaussian(5, rng) + 0.05 * gaussian(50, rng);
+  EstimatorOptions o;
+  EXPECT_EQ(estimate(p, o).x, ols(p).x);
+  o.kind = EstimatorKind::Liu;
+  EXPECT_EQ(estimate(p, o).x, liu(p).x);
+  o.kind = EstimatorKind::Ridge;
+  o.ridge = {RidgeRule::Fixed, 0.3};
+  EXPECT_EQ(estimate(p, o).x, ridge(p, 0.3).x);
+  // One factorisation, several estimators.
   const PreparedDesign design(p);
-  const double t_prepare_first = ms(clock::now() - t0);
-  double t_prepare = INFINITY, t_liu_oneshot = INFINITY;  // best of 5 (warm caches)
-  for (int rep = 0; rep < 5; ++rep) {
-    t0 = clock::now();
-    const PreparedDesign again(p);
-    t_prepare = std::min(t_prepare, ms(clock::now() - t0));
-    t0 = clock::now();
-    const Estimate e = liu(p);
-    t_liu_oneshot = std::min(t_liu_oneshot, ms(clock::now() - t0));
-    EXPECT_EQ(e.rank, 60);
-    EXPECT_EQ(again.rank(), 60);
-  }
-
-  std::normal_distribution<double> g(0.0, 0.005);
-  const int runs = 10000;
-  MatrixXd Y(882, 64);  // noise draws reused cyclically so timing excludes the RNG
-  for (Index j = 0; j < Y.cols(); ++j)
-    for (Index i = 0; i < Y.rows(); ++i) Y(i, j) = g(rng);
-  Y.colwise() += p.H * truth;
-  FitWorkspace ws;
-  VectorXd x(60), acc = VectorXd::Zero(60);
-  t0 = clock::now();
-  for (int run = 0; run < runs; ++run) {
-    design.ols(Y.col(run % 64), x, ws);
-    acc += x;
-  }
-  const double t_ols = ms(clock::now() - t0);
-  t0 = clock::now();
-  for (int run = 0; run < runs; ++run) {
-    design.liu(Y.col(run % 64), x, ws);
-    acc += x;
-  }
-  const double t_liu = ms(clock::now() - t0);
-  EXPECT_TRUE(acc.allFinite());
-  std::printf("882x60: PreparedDesign %.2f ms (first call %.2f ms), one-shot liu() %.2f ms; %d runs: OLS %.1f ms "
-              "(%.1f us/run), Liu(Eq.14) %.1f ms (%.1f us/run), single thread\n",
-              t_prepare, t_prepare_first, t_liu_oneshot, runs, t_ols, 1e3 * t_ols / runs, t_liu, 1e3 * t_liu / runs);
+  EXPECT_EQ(estimate(design, p, o).x, ridge(p, 0.3).x);
+  for (EstimatorKind k : {EstimatorKind::Ols, EstimatorKind::Ridge, EstimatorKind::Pcr, EstimatorKind::Liu})
+    EXPECT_EQ(parse_estimator(to_string(k)), k);
+  EXPECT_THROW(parse_estimator("lasso"), InputError);
+  // MODEL.json settings
+  o.ridge = {RidgeRule::Gcv, 0};
+  auto s = estimator_settings(estimate(p, o), o);
+  EXPECT_EQ(s.count("ridge_k"), 1u);
+  EXPECT_EQ(s.at("ridge_k_gcv"), 1.0);
+  o.kind = EstimatorKind::Pcr;
+  s = estimator_settings(estimate(p, o), o);
+  EXPECT_EQ(s.at("pcr_components_gcv"), 1.0);
+  EXPECT_GE(s.at("pcr_components"), 1.0);
+  o.pcr = PcrOptions{};
+  s = estimator_settings(estimate(p, o), o);
+  EXPECT_EQ(s.at("pcr_max_condition_index"), 1e3);
+  o.kind = EstimatorKind::Liu;
+  s = estimator_settings(estimate(p, o), o);
+  EXPECT_EQ(s.count("liu_d"), 1u);
+  EXPECT_EQ(s.count("liu_d_unclamped"), 1u);
+  o.kind = EstimatorKind::Ols;
+  EXPECT_TRUE(estimator_settings(estimate(p, o), o).empty());
 }
