@@ -174,10 +174,19 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
     if (!nodes[k]) continue;
     row.q = Eigen::VectorXd(effect_actual_joints(e, *nodes[k]));
     if (!row.temp || e.thermal == 0) continue;
+    // The thermal effect moves the reached pose (core thermal_reached: the
+    // position scaled about the thermal origin, no rotation), so a measured
+    // pose is scaled back and the gauge targets, fixed to the platform, are
+    // translated back by the tool point's shift (the commanded position
+    // stands in for the reached one: the shift's error is strain × a few mm,
+    // below a nanometre). Scaling the targets about the origin would also
+    // shrink the gauge triangle — a change the effect's columns do not have.
     const double scale = 1.0 / (1.0 + thermal_strain(e, *row.temp));
     if (row.measured) row.measured->head<3>() = e.thermal_origin + scale * (row.measured->head<3>() - e.thermal_origin);
-    if (row.targets)
-      for (int j = 0; j < 3; ++j) row.targets->col(j) = e.thermal_origin + scale * (row.targets->col(j) - e.thermal_origin);
+    if (row.targets) {
+      const Vec3<double> shift = (scale - 1.0) * (nodes[k]->pose.p - e.thermal_origin);
+      row.targets->colwise() += shift;
+    }
   }
   (void)robot;
   return out;
