@@ -1,7 +1,10 @@
 # End-to-end check of the firmware example (ctest firmware_end_to_end; the
 # firmware itself ran in the fixture firmware_end_to_end_run and wrote
 # DIR/fw_joints.csv). Defines: TOOL (host kincal), PYTHON, ROBOT, POSES, ERRORS,
-# DIR, COMPARE (compare_joints.py), optional TOLERANCE (default 1e-9).
+# DIR, COMPARE (compare_joints.py), optional TOLERANCE (default 1e-9) and
+# EFFECT (a `simulate --effect` value the machine also has, e.g.
+# thermal:c=1.2e-5; the re-simulation then applies it too, at each point's
+# temperature).
 #   1. the host compensates the same poses with the same model;
 #   2. the firmware's joint commands equal the host's (compare_joints.py);
 #   3. the erroneous machine (the simulation's hidden errors, no noise) driven
@@ -32,8 +35,16 @@ run(${PYTHON} ${COMPARE} ${DIR}/fw_joints.csv ${DIR}/host_joints.csv --tolerance
 
 # Re-simulate the erroneous machine, noise-free: uncompensated (nominal IK of
 # the requested poses) and on the firmware's commands.
-run(${TOOL} simulate --robot ${ROBOT} --poses ${POSES} --errors ${ERRORS} --out ${DIR}/reached_uncompensated.csv)
-run(${TOOL} simulate --robot ${ROBOT} --poses ${DIR}/fw_joints.csv --errors ${ERRORS}
+set(_effect)
+set(_fw_joints ${DIR}/fw_joints.csv)
+if(EFFECT)
+  set(_effect --effect ${EFFECT})
+  run(${PYTHON} ${_here}/with_temperature.py ${DIR}/fw_joints.csv ${POSES} ${DIR}/fw_joints_temp.csv)
+  set(_fw_joints ${DIR}/fw_joints_temp.csv)
+endif()
+run(${TOOL} simulate --robot ${ROBOT} --poses ${POSES} --errors ${ERRORS} ${_effect}
+    --out ${DIR}/reached_uncompensated.csv)
+run(${TOOL} simulate --robot ${ROBOT} --poses ${_fw_joints} --errors ${ERRORS} ${_effect}
     --out ${DIR}/reached_firmware.csv)
 run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_uncompensated.csv --prefix L2- --label "held-out layer, uncompensated"
     --min-rms-um 100)
