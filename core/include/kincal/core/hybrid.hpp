@@ -163,37 +163,33 @@ template <class Scalar> bool hybrid_within_limits(const HybridGeometry<Scalar>& 
   return !((q.array() < g.min_joint.array()).any() || (q.array() > g.max_joint.array()).any());
 }
 
-// IK: commanded joints for a tool pose in {R}; closed form. Writes `q` (and
-// `jacobian` = ∂q/∂twist, and `passive`) only on Ok.
-//   InvalidInput  non-finite pose
-//   Unreachable   no assembly reaches this pose (the wrist centre P0 within
-//                 |QP0| of A0, or the limb would point away from the work)
-//   OutOfLimits   a UPS length, wrist angle or the UP extension outside its range
-//   Singular      joint 6's axis passes through A0 (the IK has a continuum of
-//                 solutions), or, when the Jacobian is requested, a parallel or
-//                 wrist singularity (J_f rank-deficient)
+// Every frame of the chain at the nominal configuration that reaches a tool
+// pose in {R}, in closed form (trig-free but for the wrist angles), without
+// joint limits: hybrid_ik adds the commands and the limits, the controller's
+// error twist (hybrid_error_twist.hpp) uses the frames wherever the geometry
+// closes. `wrist_angles` gets the physical wrist angles θ4..θ6.
+// InvalidInput, Unreachable, Singular as hybrid_ik. A building block: `f` is
+// the caller's scratch and is filled as the computation goes (meaningful
+// only on Ok) — no second copy of the frames on the controller's stack.
 template <class Scalar>
-Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6<Scalar>& q,
-                 NonDeducedT<Mat6<Scalar>>* jacobian = nullptr, NonDeducedT<HybridPassive<Scalar>>* passive = nullptr) {
+Status hybrid_frames_at_pose(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, HybridFrames<Scalar>& f,
+                             Vec3<Scalar>& wrist_angles) {
   if (!tool.finite()) return Status::InvalidInput;
   const Mat3<Scalar> wR0t = g.workpiece_rotation.transpose();
-  const Mat3<Scalar> F6 = wR0t * tool.R * g.tool_offset.transpose();
-  const Vec3<Scalar> P = g.workpiece_origin + wR0t * tool.p;
-  const Vec3<Scalar> a6 = F6.col(1);  // joint-6 axis, = F5·y
-  const Vec3<Scalar> P0 = P - g.tool_length * F6.col(2);
+  f.F6 = wR0t * tool.R * g.tool_offset.transpose();
+  f.P = g.workpiece_origin + wR0t * tool.p;
+  const Vec3<Scalar> a6 = f.F6.col(1);  // joint-6 axis, = F5·y
+  f.P0 = f.P - g.tool_length * f.F6.col(2);
   // Q lies on the limb line through A0 and joint 5's axis is normal to that
   // line, so F5·z (the link Q→P0, normal to a6) is the part of A0→P0 normal to a6.
   // P0 at A0 would need a negative limb extension; P0 on joint 6's axis line
   // through A0 leaves the limb free to turn about that axis: a singularity.
-  if (!(P0.norm() > g.wrist_link)) return Status::Unreachable;
-  Vec3<Scalar> u = P0 - P0.dot(a6) * a6;
+  if (!(f.P0.norm() > g.wrist_link)) return Status::Unreachable;
+  Vec3<Scalar> u = f.P0 - f.P0.dot(a6) * a6;
   const Scalar un = u.norm();
-  if (!(un > Scalar(1e-6) * P0.norm())) return Status::Singular;
+  if (!(un > Scalar(1e-6) * f.P0.norm())) return Status::Singular;
   u /= un;
-  HybridFrames<Scalar> f;
-  f.P = P;
-  f.P0 = P0;
-  f.Q = P0 - g.wrist_link * u;
+  f.Q = f.P0 - g.wrist_link * u;
   const Scalar r = f.Q.norm();
   f.w = f.Q / r;
   if (!(f.w.z() > Scalar(0))) return Status::Unreachable;
@@ -213,15 +209,32 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
   f.F5.col(0) = x5;
   f.F5.col(1) = a6;
   f.F5.col(2) = u;
-  f.F6 = F6;
-  Vec3<Scalar> angles;
-  angles(0) = std::atan2(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)));  // Rp·Rz(θ4)·x = x5
-  angles(1) = std::atan2(-u.dot(f.F4.col(1)), u.dot(f.w));             // F4·Rx(θ5)·z = u
-  angles(2) = std::atan2(x5.dot(F6.col(2)), x5.dot(F6.col(0)));       // F5·Ry(θ6) = F6
-  const Vec3<Scalar> a64 = f.extension * f.w;
   f.platform_joints = f.Rp * g.platform_joints;
-  f.platform_joints.colwise() += a64;
+  f.platform_joints.colwise() += f.extension * f.w;
   f.legs = f.platform_joints - g.base_joints;
+  if (!all_finite(f.legs) || !all_finite(f.F6)) return Status::InvalidInput;
+  wrist_angles(0) = std::atan2(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)));  // Rp·Rz(θ4)·x = x5
+  wrist_angles(1) = std::atan2(-u.dot(f.F4.col(1)), u.dot(f.w));             // F4·Rx(θ5)·z = u
+  wrist_angles(2) = std::atan2(x5.dot(f.F6.col(2)), x5.dot(f.F6.col(0)));   // F5·Ry(θ6) = F6
+  return Status::Ok;
+}
+
+// IK: commanded joints for a tool pose in {R}; closed form. Writes `q` (and
+// `jacobian` = ∂q/∂twist, and `passive`) only on Ok.
+//   InvalidInput  non-finite pose
+//   Unreachable   no assembly reaches this pose (the wrist centre P0 within
+//                 |QP0| of A0, or the limb would point away from the work)
+//   OutOfLimits   a UPS length, wrist angle or the UP extension outside its range
+//   Singular      joint 6's axis passes through A0 (the IK has a continuum of
+//                 solutions), or, when the Jacobian is requested, a parallel or
+//                 wrist singularity (J_f rank-deficient)
+template <class Scalar>
+Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6<Scalar>& q,
+                 NonDeducedT<Mat6<Scalar>>* jacobian = nullptr, NonDeducedT<HybridPassive<Scalar>>* passive = nullptr) {
+  HybridFrames<Scalar> f;
+  Vec3<Scalar> angles;
+  const Status frames = hybrid_frames_at_pose(g, tool, f, angles);
+  if (frames != Status::Ok) return frames;
 
   Vec6<Scalar> cmd;
   cmd.template head<3>() = f.legs.colwise().norm().transpose();
@@ -249,8 +262,9 @@ Status hybrid_ik(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, Vec6
     inv.template rightCols<3>() *= L;
   }
   if (passive != nullptr) {
-    passive->theta1 = std::atan2(s1, c1);
-    passive->theta2 = std::atan2(s2, c2);
+    // Rp = Rx(θ1)·Ry(θ2): Rp(2,1) = s1, Rp(1,1) = c1, Rp(0,2) = s2, Rp(0,0) = c2.
+    passive->theta1 = std::atan2(f.Rp(2, 1), f.Rp(1, 1));
+    passive->theta2 = std::atan2(f.Rp(0, 2), f.Rp(0, 0));
     passive->extension = f.extension;
   }
   q = cmd;

@@ -61,52 +61,8 @@ struct HybridErrorLayout {
 };
 static_assert(HybridErrorLayout::size() == 150, "seed 000 Eq. (7): 150 source errors");
 
-// Every frame of the chain at the nominal configuration that reaches a tool
-// pose in {R}: hybrid_ik's closed form (trig-free, the same arithmetic) but
-// without joint limits, so the error twist can be evaluated wherever the
-// geometry closes. `wrist_angles` gets the physical wrist angles θ4..θ6.
-// InvalidInput, Unreachable, Singular as hybrid_ik. A building block: `f` is
-// the caller's scratch and is filled as the computation goes (meaningful
-// only on Ok) — no second copy of the frames on the controller's stack.
-template <class Scalar>
-Status hybrid_frames_at_pose(const HybridGeometry<Scalar>& g, const Pose<Scalar>& tool, HybridFrames<Scalar>& f,
-                             Vec3<Scalar>& wrist_angles) {
-  if (!tool.finite()) return Status::InvalidInput;
-  const Mat3<Scalar> wR0t = g.workpiece_rotation.transpose();
-  f.F6 = wR0t * tool.R * g.tool_offset.transpose();
-  f.P = g.workpiece_origin + wR0t * tool.p;
-  const Vec3<Scalar> a6 = f.F6.col(1);
-  f.P0 = f.P - g.tool_length * f.F6.col(2);
-  if (!(f.P0.norm() > g.wrist_link)) return Status::Unreachable;
-  Vec3<Scalar> u = f.P0 - f.P0.dot(a6) * a6;
-  const Scalar un = u.norm();
-  if (!(un > Scalar(1e-6) * f.P0.norm())) return Status::Singular;
-  u /= un;
-  f.Q = f.P0 - g.wrist_link * u;
-  const Scalar r = f.Q.norm();
-  f.w = f.Q / r;
-  if (!(f.w.z() > Scalar(0))) return Status::Unreachable;
-  f.extension = r - g.platform_to_wrist;
-  const Scalar s2 = f.w.x(), c2 = std::sqrt(f.w.y() * f.w.y() + f.w.z() * f.w.z());
-  const Scalar s1 = -f.w.y() / c2, c1 = f.w.z() / c2;
-  f.Rp << c2, Scalar(0), s2, s1 * s2, c1, -s1 * c2, -c1 * s2, s1, c1 * c2;
-  f.y1 = Vec3<Scalar>(Scalar(0), c1, s1);
-  const Vec3<Scalar> x5 = a6.cross(u);
-  f.F4.col(0) = x5;
-  f.F4.col(1) = f.w.cross(x5);
-  f.F4.col(2) = f.w;
-  f.F5.col(0) = x5;
-  f.F5.col(1) = a6;
-  f.F5.col(2) = u;
-  f.platform_joints = f.Rp * g.platform_joints;
-  f.platform_joints.colwise() += f.extension * f.w;
-  f.legs = f.platform_joints - g.base_joints;
-  if (!all_finite(f.legs) || !all_finite(f.F6)) return Status::InvalidInput;
-  wrist_angles(0) = std::atan2(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)));
-  wrist_angles(1) = std::atan2(-u.dot(f.F4.col(1)), u.dot(f.w));
-  wrist_angles(2) = std::atan2(x5.dot(f.F6.col(2)), x5.dot(f.F6.col(0)));
-  return Status::Ok;
-}
+// hybrid_frames_at_pose (the frames at a pose, without joint limits) is in
+// hybrid.hpp: hybrid_ik is built on it.
 
 namespace hybrid_twist_detail {
 
