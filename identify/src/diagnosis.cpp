@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <memory>
 #include <numeric>
 #include <set>
@@ -515,16 +516,19 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
                                 (c(2) >= zmid ? "upper z" : "lower z");
       regions[label].push_back(k);
     }
-    const ResidualGroup* worst = nullptr;
+    // The worst region by index: by_region grows (and moves) in the loop.
+    std::optional<std::size_t> worst;
     double worst_share = 0;
     for (const auto& [label, members] : regions) {
       double share = 0;
       d.by_region.push_back(group(label, members, &share));
-      if (share > worst_share) worst_share = share, worst = &d.by_region.back();
+      if (share > worst_share) worst_share = share, worst = d.by_region.size() - 1;
     }
-    if (d.verdict == "unexplained" && worst != nullptr && worst_share > 2.0 / double(regions.size()))
-      d.hotspots.push_back({"region", worst->label, worst_share,
-                            "RMS " + fmt(worst->rms_um) + " um = " + fmt(worst->ratio) + " x noise there"});
+    if (d.verdict == "unexplained" && worst && worst_share > 2.0 / double(regions.size())) {
+      const ResidualGroup& w = d.by_region[*worst];
+      d.hotspots.push_back({"region", w.label, worst_share,
+                            "RMS " + fmt(w.rms_um) + " um = " + fmt(w.ratio) + " x noise there"});
+    }
   }
   // Joints: the implied joint-space residual, standardised by its noise, in
   // bins of the joint's own position (a local error in part of a stroke).
