@@ -176,8 +176,9 @@ void expect_no_point_lost(const std::vector<JointCommand<double>>& out, const st
 // The reference: the same table's compensator driven directly.
 template <class Machine>
 std::vector<Vec6<double>> direct(const CalibrationTable<Machine>& t, const std::vector<NcInput<double>>& in,
-                                 std::vector<CS>* statuses = nullptr) {
-  const Compensator<Machine> comp(t);
+                                 std::vector<CS>* statuses = nullptr, UserJointError<double> user_effect = nullptr) {
+  Compensator<Machine> comp(t);
+  comp.set_user_effect(user_effect);
   Vec6<double> home;
   EXPECT_EQ(comp.home_command(home), CS::Ok);
   CompensatorState<double> s = comp.start(home);
@@ -237,6 +238,60 @@ TEST(PortController, StewartStreamEqualsTheCompensatorAndWritesTheLegOffsets) {
     EXPECT_LT((rig.raw(rig.out[k]) - want[k]).cwiseAbs().maxCoeff(), 1e-12) << k;
   }
   EXPECT_EQ(ctl.counters().compensated, 12u);
+}
+
+// A user joint effect (core/effects.hpp): its numbers in the table, its code
+// through ControllerConfig::user_effect. Here Δq_i = u_i · (q_i − 230 mm)².
+double quadratic_user_effect(const double* u, int joint, const Vec6<double>& q, const kincal::EffectInputs<double>&) {
+  const double d = q(joint) - 230.0;
+  return u[joint] * d * d;
+}
+
+TEST(PortController, AUserEffectComesWithTheTableAndItsCodeWithTheConfig) {
+  static const StewartCalibrationTabled with_user = [] {
+    StewartCalibrationTabled c = stewart_calibrated();
+    for (int i = 0; i < 6; ++i) c.effects.user[i] = 2e-5 * (i % 2 == 0 ? 1 : -1);
+    return seal_table(c);
+  }();
+  const auto in = stewart_path(12);
+  Rig<StewartM> rig(with_user, stewart_nominal());
+  rig.config.user_effect = &quadratic_user_effect;
+  rig.run(in);
+  expect_no_point_lost(rig.out, in);
+  const auto want = direct(with_user, in, nullptr, &quadratic_user_effect);
+  const auto without = direct(with_user, in);
+  double effect = 0;
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    EXPECT_EQ(rig.out[k].status, CS::Ok);
+    EXPECT_LT((rig.raw(rig.out[k]) - want[k]).cwiseAbs().maxCoeff(), 1e-12) << k;
+    effect = std::max(effect, (want[k] - without[k]).cwiseAbs().maxCoeff());
+  }
+  // The plug-in changed the commands (by the effect's size, micrometres).
+  EXPECT_GT(effect, 1e-4);
+  EXPECT_LT(effect, 0.1);
+}
+
+// A user effect that returns NaN: no NaN leaves core; every point is held
+// with a status and counted.
+TEST(PortController, AUserEffectReturningNanIsHeldNotSent) {
+  static const StewartCalibrationTabled with_user = [] {
+    StewartCalibrationTabled c = stewart_calibrated();
+    c.effects.user[0] = 1.0;
+    return seal_table(c);
+  }();
+  const auto in = stewart_path(6);
+  Rig<StewartM> rig(with_user, stewart_nominal());
+  rig.config.user_effect = [](const double*, int, const Vec6<double>&, const kincal::EffectInputs<double>&) {
+    return std::nan("");
+  };
+  auto& ctl = rig.run(in);
+  expect_no_point_lost(rig.out, in);
+  for (const auto& c : rig.out) {
+    EXPECT_NE(c.status, CS::Ok);
+    EXPECT_TRUE(c.flags & kCommandHeld);
+    EXPECT_TRUE(c.q.allFinite());
+  }
+  EXPECT_EQ(ctl.counters().held, in.size());
 }
 
 // ---- bad points: status, held output, counted, nothing lost ------------------

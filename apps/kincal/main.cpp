@@ -411,10 +411,12 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   std::size_t failed = 0;
   std::visit(
       [&](const auto& t) {
-        const kincal::Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
+        kincal::Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
         if (compensator.status() != kincal::CompensationStatus::Ok)
           throw ki::InputError(model_path, 0, 0,
                                std::string("calibration table: ") + kincal::to_string(compensator.status()));
+        // A registered user joint effect's code (its numbers are in the table).
+        compensator.set_user_effect(model.effects.to_core(model.nominal).user_error);
         // The stream starts with the machine at its home pose, approach
         // directions +1, as the firmware does (docs/compensation.md).
         kincal::Vec6<double> home = kincal::Vec6<double>::Zero();

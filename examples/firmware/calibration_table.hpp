@@ -2,7 +2,7 @@
 // regenerate it (the static_asserts below reject an edited value).
 //
 // robot: hybrid-seed000 (hybrid-3ups-up-3r), estimator: liu, data: measured.csv
-// Table format version 1 (core/calibration_table.hpp); values in its canonical order, 17 significant
+// Table format version 2 (core/calibration_table.hpp); values in its canonical order, 17 significant
 // digits (exact round trip), lengths in mm, angles in rad. The calibration table is what
 // `kincal compensate` runs on for this model; the nominal table is the firmware's fallback
 // when the calibration table fails its start-up check (docs/firmware.md).
@@ -12,8 +12,8 @@
 
 #include "kincal/core/calibration_table.hpp"
 
-static_assert(::kincal::kCalibrationTableVersion == 1,
-              "generated for calibration table format version 1; regenerate with this kincal");
+static_assert(::kincal::kCalibrationTableVersion == 2,
+              "generated for calibration table format version 2; regenerate with this kincal");
 
 namespace kincal::generated {
 
@@ -21,10 +21,10 @@ inline constexpr const char* kModelFile = "examples/firmware/model.json";
 inline constexpr const char* kRobot = "hybrid-seed000";
 inline constexpr const char* kGenerator = "kincal 0.1.0";
 inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::Hybrid;
-inline constexpr std::uint32_t kFormatVersion = 1;
+inline constexpr std::uint32_t kFormatVersion = 2;
 template <class Scalar> using Machine = ::kincal::HybridMachine<Scalar>;
 
-inline constexpr double kCalibrationValues_double[281] = {
+inline constexpr double kCalibrationValues_double[289] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -232,6 +232,8 @@ inline constexpr double kCalibrationValues_double[281] = {
     -627.5, 1.1327982892113014e-14, 1456.8618817494707,
     // effects.reference_temperature
     20.0,
+    // effects.user
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.02, 0.02, 0.02,
     // bounds.min_joint
@@ -239,7 +241,7 @@ inline constexpr double kCalibrationValues_double[281] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kCalibrationCrc_double = 0xD175118Bu;
+inline constexpr std::uint32_t kCalibrationCrc_double = 0x525E3F3Au;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kCalibrationTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kCalibrationValues_double, kCalibrationCrc_double);
 static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_double,
@@ -247,7 +249,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_d
 static_assert(::kincal::validate_table(kCalibrationTable_double) == ::kincal::CompensationStatus::Ok,
               "Calibration table (double): fails validate_table (values, bounds)");
 
-inline constexpr double kNominalValues_double[281] = {
+inline constexpr double kNominalValues_double[289] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -455,6 +457,8 @@ inline constexpr double kNominalValues_double[281] = {
     -627.5, 1.1327982892113014e-14, 1456.8618817494707,
     // effects.reference_temperature
     20.0,
+    // effects.user
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.02, 0.02, 0.02,
     // bounds.min_joint
@@ -462,7 +466,7 @@ inline constexpr double kNominalValues_double[281] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kNominalCrc_double = 0x45C48F4Du;
+inline constexpr std::uint32_t kNominalCrc_double = 0x1FDBCF7Bu;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kNominalTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kNominalValues_double, kNominalCrc_double);
 static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
@@ -470,7 +474,7 @@ static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
 static_assert(::kincal::validate_table(kNominalTable_double) == ::kincal::CompensationStatus::Ok,
               "Nominal table (double): fails validate_table (values, bounds)");
 
-inline constexpr double kCalibrationValues_float[281] = {
+inline constexpr double kCalibrationValues_float[289] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -678,6 +682,8 @@ inline constexpr double kCalibrationValues_float[281] = {
     -627.5, 1.1327983161419676e-14, 1456.8619384765625,
     // effects.reference_temperature
     20.0,
+    // effects.user
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164,
     // bounds.min_joint
@@ -685,7 +691,7 @@ inline constexpr double kCalibrationValues_float[281] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kCalibrationCrc_float = 0x0DDB698Cu;
+inline constexpr std::uint32_t kCalibrationCrc_float = 0xAA69C94Cu;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kCalibrationTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kCalibrationValues_float, kCalibrationCrc_float);
 static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_float,
@@ -693,7 +699,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_fl
 static_assert(::kincal::validate_table(kCalibrationTable_float) == ::kincal::CompensationStatus::Ok,
               "Calibration table (float): fails validate_table (values, bounds)");
 
-inline constexpr double kNominalValues_float[281] = {
+inline constexpr double kNominalValues_float[289] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -901,6 +907,8 @@ inline constexpr double kNominalValues_float[281] = {
     -627.5, 1.1327983161419676e-14, 1456.8619384765625,
     // effects.reference_temperature
     20.0,
+    // effects.user
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164,
     // bounds.min_joint
@@ -908,7 +916,7 @@ inline constexpr double kNominalValues_float[281] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kNominalCrc_float = 0x8AFC9037u;
+inline constexpr std::uint32_t kNominalCrc_float = 0x87BEE295u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kNominalTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kNominalValues_float, kNominalCrc_float);
 static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,

@@ -337,11 +337,11 @@ template <class Scalar> void check_hybrid_statuses(Checker& c) {
 // FK reaches the requested pose; a NaN point and a corrupt table each give
 // their status and hold the output.
 struct CompensationCheckValues {
-  double v[192];
+  double v[table_value_count<StewartMachine<double>>()];
 };
 constexpr CompensationCheckValues compensation_check_values() {
   CompensationCheckValues c{};
-  for (int k = 0; k < 192; ++k) c.v[k] = double(k % 7 - 3) * 0.125 + double(k) * 1e-3;
+  for (int k = 0; k < int(table_value_count<StewartMachine<double>>()); ++k) c.v[k] = double(k % 7 - 3) * 0.125 + double(k) * 1e-3;
   return c;
 }
 constexpr CompensationCheckValues kCompensationCheckValues = compensation_check_values();

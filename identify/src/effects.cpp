@@ -281,7 +281,12 @@ EffectParameters<double> EffectValues::to_core(const Robot& robot) const {
   for (const auto& [name, v] : values) {
     const Effect* e = find_effect(name);
     if (e == nullptr) throw InputError("unknown effect '" + name + "' (known: " + effect_names() + ")");
+    const UserJointError<double> before = out.user_error;
     e->apply(robot, v, out);
+    // core has one user slot (EffectParameters::user, user_error).
+    if (before != nullptr && out.user_error != before)
+      throw InputError("effects: '" + name + "' and another effect both use the controller's one user joint effect "
+                       "slot; identify them in separate models or combine them into one effect");
   }
   return out;
 }

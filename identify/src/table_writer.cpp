@@ -47,7 +47,7 @@ void add_effects_and_bounds(Groups& g) {
        Groups{{"effects.scale", 6}, {"effects.backlash", 6}, {"effects.compliance", 6}, {"effects.cyclic_sin", 6},
               {"effects.cyclic_cos", 6}, {"effects.thermal", 1}, {"effects.screw_lead", 1},
               {"effects.screw_joints", 1}, {"effects.load_direction", 3}, {"effects.thermal_origin", 3},
-              {"effects.reference_temperature", 1}, {"bounds.max_correction", 6}, {"bounds.min_joint", 6},
+              {"effects.reference_temperature", 1}, {"effects.user", kUserEffectParameters}, {"bounds.max_correction", 6}, {"bounds.min_joint", 6},
               {"bounds.max_joint", 6}})
     g.emplace_back(name, n);
 }
@@ -139,6 +139,7 @@ template <class Machine> CalibrationTable<Machine> nominal_of(const CalibrationT
   e.cyclic_sin.setZero();
   e.cyclic_cos.setZero();
   e.thermal = S(0);
+  e.user.setZero();
   if constexpr (Machine::family == MachineFamily::Hybrid) {
     return nominal_table(to_core(calibrated.machine.nominal), calibrated.machine.up_split, e);
   } else {

@@ -55,7 +55,7 @@
 namespace kincal {
 
 // Bumped whenever the layout or the meaning of a table value changes.
-inline constexpr std::uint32_t kCalibrationTableVersion = 1;
+inline constexpr std::uint32_t kCalibrationTableVersion = 2;  // 2: effects.user
 
 enum class MachineFamily : std::uint8_t {
   Stewart6Ups = 1,  // stewart-6ups (seed 001)
@@ -151,6 +151,7 @@ template <class Scalar> struct EffectTable {
   Scalar load_direction[3];
   Scalar thermal_origin[3];
   Scalar reference_temperature;
+  Scalar user[kUserEffectParameters];  // the user joint effect's numbers (its function is code)
 
   template <class Self, class F> static constexpr void visit(Self& s, F& f) {
     using table_detail::each;
@@ -165,6 +166,7 @@ template <class Scalar> struct EffectTable {
     each(s.load_direction, f);
     each(s.thermal_origin, f);
     f(s.reference_temperature);
+    each(s.user, f);
   }
 };
 
@@ -533,6 +535,7 @@ template <class Scalar> EffectParameters<Scalar> to_core(const EffectTable<Scala
   e.load_direction = get<Scalar, 3, 1>(t.load_direction);
   e.thermal_origin = get<Scalar, 3, 1>(t.thermal_origin);
   e.reference_temperature = t.reference_temperature;
+  e.user = get<Scalar, kUserEffectParameters, 1>(t.user);
   return e;
 }
 
@@ -550,6 +553,7 @@ template <class Scalar> EffectTable<Scalar> to_table(const EffectParameters<Scal
   put(e.load_direction, t.load_direction);
   put(e.thermal_origin, t.thermal_origin);
   t.reference_temperature = e.reference_temperature;
+  put(e.user, t.user);
   return t;
 }
 

@@ -181,6 +181,14 @@ template <class Machine> class Compensator {
     thermal_ = effects_.thermal != Scalar(0);
   }
 
+  // The user joint effect's function (core/effects.hpp UserJointError): the
+  // table holds its identified numbers (effects.user), the firmware supplies
+  // the code, once at start-up before the first point. Null removes it.
+  void set_user_effect(UserJointError<Scalar> function) {
+    effects_.user_error = function;
+    joint_effects_ = effects_.joint_effects_present();
+  }
+
   CompensationStatus status() const { return status_; }
   const Table& table() const { return *table_; }
   const EffectParameters<Scalar>& effects() const { return effects_; }

@@ -16,6 +16,10 @@
 //                 the reached tool point moves away from the base origin o by that factor,
 //                 p' = o + (1 + ε)(p − o), ε = c·(T − T0); orientation is unchanged
 //                 (a uniform scaling of a mechanism preserves its angles).
+//   user joint effect (one plug-in slot, docs/effects.md)
+//     user        Δq_i = f(u, i, q, inputs): the user's function f, compiled
+//                 into the controller, of up to kUserEffectParameters
+//                 identified numbers u (from the table like every other value)
 //
 // Correction (compensation): the pose is pre-scaled by 1/(1 + ε) before the
 // IK, and the IK's ideal joints q* are turned into commands q with
@@ -32,6 +36,17 @@
 
 namespace kincal {
 
+template <class Scalar> struct EffectInputs;
+
+// The user joint effect's plug-in point: Δq of joint `joint` (0..5) at
+// command q from the identified numbers `u` (kUserEffectParameters of them).
+// It runs on the controller every NC point: no heap, no exceptions, bounded
+// time; whatever it returns is checked (a non-finite Δq is a status, a large
+// one is caught by the correction bound).
+constexpr int kUserEffectParameters = 8;
+template <class Scalar>
+using UserJointError = Scalar (*)(const Scalar* u, int joint, const Vec6<Scalar>& q, const EffectInputs<Scalar>& in);
+
 // Identified effect parameters of one machine (immutable on the controller;
 // zero = effect absent). Units: joint units (mm for prismatic, rad for
 // revolute joints) per unit of the effect's input.
@@ -42,6 +57,11 @@ template <class Scalar> struct EffectParameters {
   Vec6<Scalar> cyclic_sin = Vec6<Scalar>::Zero();  // a_i, joint units
   Vec6<Scalar> cyclic_cos = Vec6<Scalar>::Zero();  // b_i (of the cyclic term), joint units
   Scalar thermal = Scalar(0);                      // c, 1/°C
+  Eigen::Matrix<Scalar, kUserEffectParameters, 1> user =
+      Eigen::Matrix<Scalar, kUserEffectParameters, 1>::Zero();  // u of the user joint effect
+  // The user joint effect's function: code, not data, so not in the table;
+  // the controller sets it (Compensator::set_user_effect). Null: no user effect.
+  UserJointError<Scalar> user_error = nullptr;
 
   // Machine data the corrections need (fixed by the robot description).
   Scalar screw_lead = Scalar(5);  // p, mm per revolution
@@ -52,11 +72,11 @@ template <class Scalar> struct EffectParameters {
 
   bool joint_effects_present() const {
     return !(scale.isZero() && backlash.isZero() && compliance.isZero() && cyclic_sin.isZero() &&
-             cyclic_cos.isZero());
+             cyclic_cos.isZero() && (user_error == nullptr || user.isZero()));
   }
   bool finite() const {
     return all_finite(scale) && all_finite(backlash) && all_finite(compliance) && all_finite(cyclic_sin) &&
-           all_finite(cyclic_cos) && is_finite(thermal) && is_finite(screw_lead) && screw_lead > Scalar(0) &&
+           all_finite(cyclic_cos) && all_finite(user) && is_finite(thermal) && is_finite(screw_lead) && screw_lead > Scalar(0) &&
            all_finite(load_direction) && all_finite(thermal_origin) && is_finite(reference_temperature);
   }
 
@@ -68,6 +88,7 @@ template <class Scalar> struct EffectParameters {
     e.cyclic_sin = cyclic_sin.template cast<Other>();
     e.cyclic_cos = cyclic_cos.template cast<Other>();
     e.thermal = Other(thermal);
+    e.user = user.template cast<Other>();  // user_error stays null: a function is per scalar type
     e.screw_lead = Other(screw_lead);
     e.screw_joints = screw_joints;
     e.load_direction = load_direction.template cast<Other>();
@@ -97,6 +118,8 @@ Vec6<Scalar> effect_joint_error(const EffectParameters<Scalar>& e, const Vec6<Sc
     const Scalar phase = k * q(i);
     dq(i) += e.cyclic_sin(i) * std::sin(phase) + e.cyclic_cos(i) * std::cos(phase);
   }
+  if (e.user_error != nullptr)
+    for (int i = 0; i < 6; ++i) dq(i) += e.user_error(e.user.data(), i, q, in);
   return dq;
 }
 

@@ -44,7 +44,9 @@ class Effect {
   virtual void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
                              Eigen::Ref<Eigen::MatrixXd> columns) const = 0;
   // Controller half: writes identified values (in parameter_names order) into
-  // core's parameter set; `values` adds to what is there.
+  // core's parameter set; `values` adds to what is there. A user joint effect
+  // writes its numbers to out.user and its function to out.user_error (core
+  // has one such slot; docs/effects.md).
   virtual void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const = 0;
 };
 

@@ -66,6 +66,9 @@ template <class Scalar> struct ControllerConfig {
   // compensated command at the machine's home pose.
   bool has_initial_command = false;
   Vec6<Scalar> initial_command = Vec6<Scalar>::Zero();
+  // The user joint effect's code (core/effects.hpp UserJointError), if the
+  // machine's model has one; its numbers come with the table.
+  UserJointError<Scalar> user_effect = nullptr;
 };
 
 struct ControllerCounters {
@@ -122,6 +125,7 @@ template <class Machine, class Registers, class Stream> class Controller {
         (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
     initial_ = config.initial_command;
     has_initial_ = config.has_initial_command;
+    compensator_.set_user_effect(config.user_effect);
   }
 
   // Writes and verifies the encoder offsets (see the file comment) and sets
