@@ -216,27 +216,30 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
 
   progress("fitting the base model on the cal rows");
   const std::vector<std::optional<EffectNode>> en = effect_nodes(robot, data);
-  const BaseModel base = detail::fit_base(robot, data, en, "ols", true);
+  BaseModel base = detail::fit_base(robot, data, en, "ols", true);
   d.base_model = base.description;
 
-  // Stacks per role.
-  Stack cal, test;
-  {
+  // Stacks per role, from a base model's nodes (H, residual), and the
+  // candidates' columns at its nodes.
+  auto build_stacks = [](const BaseModel& b, Stack& cal_out, Stack& test_out) {
     Index nc = 0, nt = 0;
-    for (const NodeData& n : base.nodes) (n.test ? nt : nc) += n.r.size();
-    cal.H.resize(nc, base.parameters), cal.y.resize(nc);
-    test.H.resize(nt, base.parameters), test.y.resize(nt);
+    for (const NodeData& n : b.nodes) (n.test ? nt : nc) += n.r.size();
+    cal_out = Stack{}, test_out = Stack{};
+    cal_out.H.resize(nc, b.parameters), cal_out.y.resize(nc);
+    test_out.H.resize(nt, b.parameters), test_out.y.resize(nt);
     Index rc = 0, rt = 0;
-    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
-      const NodeData& n = base.nodes[k];
-      Stack& s = n.test ? test : cal;
+    for (std::size_t k = 0; k < b.nodes.size(); ++k) {
+      const NodeData& n = b.nodes[k];
+      Stack& st = n.test ? test_out : cal_out;
       Index& r = n.test ? rt : rc;
-      s.H.middleRows(r, n.r.size()) = n.H;
-      s.y.segment(r, n.r.size()) = n.r;
-      s.node.push_back(k);
+      st.H.middleRows(r, n.r.size()) = n.H;
+      st.y.segment(r, n.r.size()) = n.r;
+      st.node.push_back(k);
       r += n.r.size();
     }
-  }
+  };
+  Stack cal, test;
+  build_stacks(base, cal, test);
   if (test.node.empty())
     d.notes.push_back("no test rows: effects are accepted on significance alone (no held-out check)");
 
@@ -302,6 +305,9 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
   FitResult current = base_fit;
   d.steps.push_back({{"base"}, base_fit.rms});
   std::map<std::string, EffectTest> latest;
+  // Effect values the current linearisation starts from (re-linearised
+  // steps); the final fit's coefficients are increments on them.
+  std::map<std::string, VectorXd> effect_start;
   for (int step = 1; step <= int(candidates.size()); ++step) {
     // Step 1 always ranks the candidates (the user sees what each would add);
     // effects are accepted only while the residual is not yet at the noise.
@@ -370,6 +376,41 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
     latest[best->effect].accepted = true;
     accepted.push_back(best->effect);
     current = fit(cal, test, accepted);
+    if (options.relinearise) {
+      // The linear refit is one Gauss–Newton step from the base-only fit;
+      // an effect much confounded with the base (the hybrid's compliance:
+      // 99.9 %) moves the base far enough that the step falls short. Fit the
+      // accepted effects with the base nonlinearly (calibrate_with_effects),
+      // refit the base on the effect-corrected data and test the next
+      // candidates at that solution. Kept only if it fits the cal rows
+      // better than the linear step (an alternation that failed is ignored).
+      progress("re-linearising the base with " + best->effect);
+      EffectCalibrationOptions eo;
+      eo.estimator = "ols";
+      eo.max_passes = 4;
+      const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
+      BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
+                                         en, "ols", true);
+      bool same_nodes = moved.nodes.size() == base.nodes.size();
+      for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
+        same_nodes = moved.nodes[k].row == base.nodes[k].row && moved.nodes[k].r.size() == base.nodes[k].r.size();
+      if (same_nodes) {
+        Stack cal2, test2;
+        build_stacks(moved, cal2, test2);
+        for (const Effect* e : candidates) {
+          cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false);
+          test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true);
+        }
+        const FitResult moved_fit = fit(cal2, test2, accepted);
+        if (moved_fit.rss < current.rss) {
+          base = std::move(moved);
+          cal = std::move(cal2);
+          test = std::move(test2);
+          current = moved_fit;
+          for (const std::string& a : accepted) effect_start[a] = m.effects.values.at(a);
+        }
+      }
+    }
     std::vector<std::string> model = {"base"};
     model.insert(model.end(), accepted.begin(), accepted.end());
     d.steps.push_back({model, current.rms});
@@ -398,8 +439,11 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
     Index c = base.parameters;
     for (const std::string& a : accepted) {
       const std::vector<std::string> names = find_effect(a)->parameter_names(robot);
+      const auto start_it = effect_start.find(a);
       for (std::size_t j = 0; j < names.size(); ++j)
-        d.accepted_parameters.emplace_back(a + ":" + names[j], current.coef(c + Index(j)));
+        d.accepted_parameters.emplace_back(
+            a + ":" + names[j],
+            current.coef(c + Index(j)) + (start_it != effect_start.end() ? start_it->second(Index(j)) : 0.0));
       c += Index(names.size());
     }
   }

@@ -25,6 +25,9 @@ struct DiagnoseOptions {
   double min_test_gain = 0.05;     // an effect must cut the held-out RMS by ≥ 5 % to be accepted
   std::vector<std::string> candidates;  // empty: every registered effect
   bool progress = false;                // progress lines on stderr
+  // After each accepted effect, fit it with the base nonlinearly and test the
+  // next candidates at that solution (false: one linear step from the base fit).
+  bool relinearise = true;
 };
 
 // RMS of the residual per measured coordinate (µm): gauge target coordinates
