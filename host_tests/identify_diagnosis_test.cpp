@@ -247,15 +247,10 @@ TEST_P(HiddenEffect, IsNamedFirstAcceptedAndCompensated) {
   const double floor = clean_compensated_um(which);
   std::printf("  %s %s: test-row position error uncompensated %.1f um, compensated %.2f um (clean-data floor %.2f um)\n",
               which.c_str(), effect.c_str(), uncompensated, compensated, floor);
-  // The floor is what the base model reaches on data without the effect.
-  // 6-UPS: within 1.1–3.5× of it (backlash worst: the first test row's
-  // approach direction). Hybrid: within 1.1× for compliance, thermal and
-  // cyclic; backlash 2.5× (docs/diagnosis.md, "Known limits").
-  if (which == "stewart") {
-    EXPECT_LT(compensated, 0.05 * uncompensated) << effect;
-  } else {
-    EXPECT_LT(compensated, (effect == "backlash" ? 3.0 : 1.25) * floor) << effect;
-  }
+  // The floor is what the base model reaches on data without the effect:
+  // measured within 1.4× of it on the 6-UPS (cyclic worst) and 1.13× on the
+  // hybrid (backlash worst).
+  EXPECT_LT(compensated, (which == "stewart" ? 1.5 : 1.25) * floor) << effect;
   RecordProperty("uncompensated_um", std::to_string(uncompensated));
   RecordProperty("compensated_um", std::to_string(compensated));
 }

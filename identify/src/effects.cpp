@@ -233,27 +233,23 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
     nodes[k] = n;
   }
   if (!table.has_dir) {
-    // Approach direction from the command sequence: the sign of the change
-    // from the previous node, kept while a joint stands still; before its
-    // first move a joint takes the direction of that move.
+    // Approach direction from the command sequence, as the controller keeps
+    // it (core/compensation.hpp): the machine starts at its home pose with
+    // every direction +1; then the sign of the change from the previous node,
+    // kept while a joint stands still.
+    Vec6<double> q_home;
+    const bool home = robot.inverse(robot.home_pose(), q_home) == Status::Ok;
     for (int j = 0; j < 6; ++j) {
-      double current = 0;
+      double current = 1;
       std::optional<double> previous_q;
-      std::vector<std::size_t> pending;
+      if (home) previous_q = q_home(j);
       for (std::size_t k = 0; k < nodes.size(); ++k) {
         if (!nodes[k]) continue;
         const double qj = nodes[k]->q(j);
         if (previous_q && std::abs(qj - *previous_q) > 1e-12 * (1 + std::abs(qj))) current = qj > *previous_q ? 1 : -1;
         previous_q = qj;
-        if (current == 0) {
-          pending.push_back(k);
-          continue;
-        }
-        for (std::size_t p : pending) nodes[p]->inputs.direction(j) = current;
-        pending.clear();
         nodes[k]->inputs.direction(j) = current;
       }
-      for (std::size_t p : pending) nodes[p]->inputs.direction(j) = 1;
     }
   }
   return nodes;

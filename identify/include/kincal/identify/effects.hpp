@@ -67,9 +67,10 @@ EffectParameters<double> effect_frame(const Robot& robot);
 
 // Per-row effect nodes for a table, in row order (rows whose nominal IK fails
 // get std::nullopt): q from q1..q6 or the nominal IK, directions from
-// dir1..dir6 or derived from the command sequence (sign of the change from
-// the previous row, kept when a joint does not move; the first row takes the
-// first change), the static load and joint_twist at the nominal configuration.
+// dir1..dir6 or derived from the command sequence as the controller keeps
+// them (the machine starts at its home pose, every direction +1; then the
+// sign of the change from the previous row, kept when a joint does not move),
+// the static load and joint_twist at the nominal configuration.
 std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const PoseTable& table);
 
 // Effect values from `--effect NAME:PARAM=VALUE` settings or a model: name →
