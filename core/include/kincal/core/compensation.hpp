@@ -171,6 +171,14 @@ template <class Machine> class Compensator {
     if (status_ != CompensationStatus::Ok) return;
     model_.load(table.machine);
     effects_ = to_core(table.effects);
+#if !KINCAL_CORE_USER_EFFECT
+    // User numbers without the code to use them: refuse rather than drop
+    // part of the model (effects.hpp, KINCAL_CORE_USER_EFFECT).
+    if (!effects_.user.isZero()) {
+      status_ = CompensationStatus::TableValues;
+      return;
+    }
+#endif
     for (int i = 0; i < 6; ++i) {
       max_correction_(i) = table.bounds.max_correction[i];
       min_joint_(i) = table.bounds.min_joint[i];

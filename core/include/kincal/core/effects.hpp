@@ -38,6 +38,15 @@ namespace kincal {
 
 template <class Scalar> struct EffectInputs;
 
+// KINCAL_CORE_USER_EFFECT (default 1): whether the compensation calls the user
+// joint effect's function. It is an indirect call, which a static worst-case
+// stack analysis cannot bound; firmware without a user effect builds with 0
+// (port/baremetal/CMakeLists.txt), and a table that carries user numbers is
+// then refused (the model has physics this build has no code for).
+#ifndef KINCAL_CORE_USER_EFFECT
+#define KINCAL_CORE_USER_EFFECT 1
+#endif
+
 // The user joint effect's plug-in point: Δq of joint `joint` (0..5) at
 // command q from the identified numbers `u` (kUserEffectParameters of them).
 // It runs on the controller every NC point: no heap, no exceptions, bounded
@@ -118,8 +127,10 @@ Vec6<Scalar> effect_joint_error(const EffectParameters<Scalar>& e, const Vec6<Sc
     const Scalar phase = k * q(i);
     dq(i) += e.cyclic_sin(i) * std::sin(phase) + e.cyclic_cos(i) * std::cos(phase);
   }
+#if KINCAL_CORE_USER_EFFECT
   if (e.user_error != nullptr)
     for (int i = 0; i < 6; ++i) dq(i) += e.user_error(e.user.data(), i, q, in);
+#endif
   return dq;
 }
 
