@@ -23,6 +23,7 @@ int run_diagnose(const DiagnoseArgs& args);
 // `kincal identify --effects e1,e2`: base model and effects together
 // (identify/effect_calibration.hpp).
 int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,
-                              const std::string& effects, const std::string& estimator, const std::string& json);
+                              const std::string& effects, const std::string& estimator, const std::string& json,
+                              double effect_alpha);
 
 }  // namespace kincal_app

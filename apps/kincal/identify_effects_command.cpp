@@ -16,7 +16,8 @@ namespace ki = kincal::identify;
 namespace kincal_app {
 
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
-                              const std::string& effects, const std::string& estimator, const std::string& json_path) {
+                              const std::string& effects, const std::string& estimator, const std::string& json_path,
+                              double effect_alpha) {
   if (!estimator.empty() && estimator != (robot.is_hybrid() ? "liu" : "ols") && !(robot.is_hybrid() && estimator == "ols"))
     throw ki::InputError("--estimator " + estimator + " with --effects: use " +
                          (robot.is_hybrid() ? "liu (default) or ols" : "ols (default)"));
@@ -30,10 +31,19 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
   opt.estimator = estimator;
+  opt.alpha = effect_alpha;
   ki::EffectCalibrationReport report;
   const ki::CalibrationModel model = ki::calibrate_with_effects(robot, data, names, opt, &report);
   for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
     std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
+  for (const ki::HeldParameter& h : report.held) {
+    std::cout << "  held at 0: " << h.effect << " " << h.parameter;
+    if (h.t == 0)
+      std::cout << " (no column on this data: its input is zero or it is a combination of the others)\n";
+    else
+      std::cout << " (not significant beyond the base and the other parameters: t = " << h.t << ", p = " << h.p_value
+                << " x " << h.free_parameters << " free > alpha " << opt.alpha << ")\n";
+  }
   std::cout << "  final: cal " << report.rms_cal_um_final << " um, test " << report.rms_test_um_final << " um\n";
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
   for (const auto& [name, v] : model.effects.values) {
@@ -53,6 +63,11 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
     j["estimator"] = model.estimator;
     j["effects"] = values;
     j["passes"] = report.passes;
+    nlohmann::ordered_json held = nlohmann::ordered_json::array();
+    for (const ki::HeldParameter& h : report.held)
+      held.push_back({{"effect", h.effect}, {"parameter", h.parameter}, {"t", h.t}, {"p_value", h.p_value},
+                      {"free_parameters", h.free_parameters}});
+    j["held_at_zero"] = held;
     j["residual_rms_um"] = {{"cal", report.rms_cal_um_final}, {"test", report.rms_test_um_final}};
     j["outliers"] = nlohmann::ordered_json::array();
     std::ofstream f(json_path);

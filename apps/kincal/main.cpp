@@ -121,6 +121,7 @@ struct IdentifyArgs {
   std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
   Eigen::Index pcr_components = 0;        // 0: by GCV
   std::vector<long long> coarse_layers;   // hybrid: the coarse stage's layers (default: the cal rows)
+  double effect_alpha = 0.05;             // --effects: significance for holding effect parameters at 0
 };
 
 // --estimator with --ridge-k / --pcr-components as library options.
@@ -303,7 +304,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
 
 int run_identify(const IdentifyArgs& a) {
   const ki::Robot robot = ki::load_robot(a.robot);
-  if (!a.effects.empty()) return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json);
+  if (!a.effects.empty()) return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha);
   if (robot.is_hybrid()) {
     ki::PoseTableOptions options;
     options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
@@ -537,7 +538,11 @@ int run(int argc, char** argv) {
                        "hybrid: layers whose rows run the coarse stage, e.g. 2 (seed 000 Sec. 5: the middle layer); "
                        "default: the cal rows")
       ->delimiter(',');
-  identify->add_option("--effects", ident.effects, "effects to include (issue #4)");
+  identify->add_option("--effects", ident.effects, "effects to include, e.g. scale,thermal ('kincal effects' lists them)");
+  identify->add_option("--effect-alpha", ident.effect_alpha,
+                       "with --effects: an effect parameter not significant at this family-wise level (t test in the "
+                       "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.05)")
+      ->check(CLI::Range(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
   identify->add_flag("--exclude-outliers", ident.exclude_outliers,
                      "fit without the nodes found inconsistent with the others (default: report them only)");

@@ -388,6 +388,10 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
       EffectCalibrationOptions eo;
       eo.estimator = "ols";
       eo.max_passes = 4;
+      // Every parameter of an accepted effect stays free here: the step
+      // moves the base for the next tests, and the elimination's extra
+      // rounds would cost more than the 0.5 s a diagnosis has.
+      eo.alpha = 0;
       const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
       BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
                                          en, "ols", true);

@@ -1,10 +1,14 @@
 #include "kincal/identify/effect_calibration.hpp"
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <cmath>
+#include <map>
+#include <optional>
 
 #include "base_fit.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -33,6 +37,141 @@ void stack(const detail::BaseModel& base, bool test, MatrixXd& H, VectorXd& y) {
   }
 }
 
+
+// [H G]: the base design and the columns of the effect parameters not held.
+MatrixXd joint_design(const Robot& robot, const std::vector<const Effect*>& list,
+                      const std::map<std::string, std::vector<bool>>& held, const detail::BaseModel& base,
+                      const MatrixXd& H) {
+  std::vector<MatrixXd> G;
+  Index cols = H.cols();
+  for (const Effect* e : list) {
+    G.push_back(detail::effect_columns(robot, *e, base, false));
+    for (bool h : held.at(e->name())) cols += h ? 0 : 1;
+  }
+  MatrixXd X(H.rows(), cols);
+  X.leftCols(H.cols()) = H;
+  Index c = H.cols();
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::vector<bool>& h = held.at(list[i]->name());
+    for (Index j = 0; j < G[i].cols(); ++j)
+      if (!h[std::size_t(j)]) X.col(c++) = G[i].col(j);
+  }
+  return X;
+}
+
+// The free effect parameter with the largest p-value of its t test in the
+// joint least-squares fit at the solution (t² ~ F(1, n − rank)); a parameter
+// whose column is zero or lies in the span of the others (p = 1) first.
+std::optional<HeldParameter> least_significant(const Robot& robot, const std::vector<const Effect*>& list,
+                                               const std::map<std::string, std::vector<bool>>& held,
+                                               const EffectValues& values, const detail::BaseModel& base) {
+  MatrixXd H;
+  VectorXd y;
+  stack(base, false, H, y);
+  const MatrixXd X = joint_design(robot, list, held, base, H);
+  const Index free = X.cols() - H.cols();
+  if (free == 0) return std::nullopt;
+  VectorXd scale(X.cols());
+  for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
+  const Eigen::JacobiSVD<MatrixXd> svd(X * scale.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
+  const VectorXd& sv = svd.singularValues();
+  Index rank = 0;
+  while (rank < sv.size() && sv(rank) > 1e-10 * sv(0)) ++rank;
+  const double dof = double(X.rows() - rank);
+  if (dof < 1) return std::nullopt;
+  // The residual at the solution (y itself: the base is at its minimum for
+  // these effect values, and the effect step has converged).
+  const double sigma2 = y.squaredNorm() / dof;
+  std::optional<HeldParameter> worst;
+  Index c = H.cols();
+  for (const Effect* e : list) {
+    const std::vector<std::string> names = e->parameter_names(robot);
+    const std::vector<bool>& h = held.at(e->name());
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      if (h[j]) continue;
+      HeldParameter p{e->name(), names[j], j, 0.0, 1.0, std::size_t(free)};
+      // Variance of the scaled coefficient: Σ_k V_ck² / σ_k² over the rank;
+      // a column with a part outside the rank (collinear) is not identified.
+      const VectorXd v = svd.matrixV().row(c).transpose();
+      const double outside = v.tail(v.size() - rank).squaredNorm();
+      if (X.col(c).norm() > 0 && outside < 1e-12) {
+        const double var = (v.head(rank).array().square() / sv.head(rank).array().square()).sum() * sigma2;
+        p.t = values.values.at(e->name())(Index(j)) * scale(c) / std::sqrt(var);
+        p.p_value = f_distribution_upper_tail(p.t * p.t, 1.0, dof);
+      }
+      if (!worst || p.p_value > worst->p_value) worst = p;
+      ++c;
+    }
+  }
+  return worst;
+}
+
+// The alternation of the header comment from `values` (warm start): fit
+// the base on the effect-corrected data, one joint linear step on [H G] for
+// the effects, repeat. Parameters with held[e][j] stay where they are (their
+// columns are left out of the step).
+detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
+                            const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
+                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep) {
+  detail::BaseModel base;
+  EffectValues previous = values;
+  bool halved = false;
+  const std::size_t first = rep.rms_cal_um.size();
+  for (int pass = 0; pass < options.max_passes; ++pass) {
+    const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
+    // The base is fitted to its least-squares minimum (what the linear [H G]
+    // step assumes; for the hybrid seed 000's estimate finished by
+    // Gauss–Newton), here and for the final model.
+    base = detail::fit_base(robot, corrected, nodes, "ols", true);
+    MatrixXd H;
+    VectorXd y;
+    stack(base, false, H, y);
+    rep.rms_cal_um.push_back(rms_um(y));
+    if (list.empty()) break;
+    // Alternation is not guaranteed to descend: a pass that raises the cal
+    // residual is undone (halving the last update once before giving up).
+    if (rep.rms_cal_um.size() > first + 1 && rep.rms_cal_um.back() > rep.rms_cal_um[rep.rms_cal_um.size() - 2] * 1.0001) {
+      for (auto& [name, v] : values.values) v = previous.values.at(name) + 0.5 * (v - previous.values.at(name));
+      if (halved) {
+        values = previous;
+        break;
+      }
+      halved = true;
+      rep.rms_cal_um.back() = rep.rms_cal_um[rep.rms_cal_um.size() - 2];
+      continue;
+    }
+    previous = values;
+    halved = false;
+    // One linear step on [H G] (G: the effects' free columns), column-scaled,
+    // by a rank-revealing orthogonal decomposition; only the effect part is
+    // kept, the base is refitted nonlinearly in the next pass.
+    const MatrixXd X = joint_design(robot, list, held, base, H);
+    VectorXd scale(X.cols());
+    for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
+    Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+    cod.setThreshold(1e-10);
+    cod.compute(X * scale.cwiseInverse().asDiagonal());
+    const VectorXd delta = scale.cwiseInverse().asDiagonal() * cod.solve(y);
+    // Convergence on the effect's contribution to the residual (scaled update).
+    const VectorXd scaled_effect_step = (scale.asDiagonal() * delta).tail(X.cols() - H.cols());
+    Index c = H.cols();
+    for (const Effect* e : list) {
+      VectorXd& v = values.values[e->name()];
+      const std::vector<bool>& h = held.at(e->name());
+      for (Index j = 0; j < v.size(); ++j)
+        if (!h[std::size_t(j)]) v(j) += delta(c++);
+    }
+    rep.passes += 1;
+    if (scaled_effect_step.norm() <= options.tolerance * std::max(1e-9, y.norm())) break;
+  }
+  // The base model that goes with the final effect values (the last fit in
+  // the loop may belong to an update that was undone or not yet applied).
+  if (!list.empty())
+    base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
+                            "ols", true);
+  return base;
+}
+
 }  // namespace
 
 CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
@@ -47,71 +186,29 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   }
   const std::vector<std::optional<EffectNode>> nodes = effect_nodes(robot, data);
   EffectValues values;
-  for (const Effect* e : list) values.values[e->name()] = VectorXd::Zero(Index(e->parameter_names(robot).size()));
+  std::map<std::string, std::vector<bool>> held;
+  for (const Effect* e : list) {
+    const std::size_t k = e->parameter_names(robot).size();
+    values.values[e->name()] = VectorXd::Zero(Index(k));
+    held[e->name()].assign(k, false);
+  }
 
   EffectCalibrationReport rep;
-  detail::BaseModel base;
-  EffectValues previous = values;
-  bool halved = false;
-  for (int pass = 0; pass < options.max_passes; ++pass) {
-    const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
-    // The base is fitted to its least-squares minimum (what the linear [H G]
-    // step assumes; for the hybrid seed 000's estimate finished by
-    // Gauss–Newton), here and for the final model.
-    base = detail::fit_base(robot, corrected, nodes, "ols", true);
-    MatrixXd H;
-    VectorXd y;
-    stack(base, false, H, y);
-    rep.rms_cal_um.push_back(rms_um(y));
-    if (list.empty()) break;
-    // Alternation is not guaranteed to descend: a pass that raises the cal
-    // residual is undone (halving the last update once before giving up).
-    if (pass > 0 && rep.rms_cal_um.back() > rep.rms_cal_um[rep.rms_cal_um.size() - 2] * 1.0001) {
-      for (auto& [name, v] : values.values) v = previous.values.at(name) + 0.5 * (v - previous.values.at(name));
-      if (halved) {
-        values = previous;
-        break;
-      }
-      halved = true;
-      rep.rms_cal_um.back() = rep.rms_cal_um[rep.rms_cal_um.size() - 2];
-      continue;
-    }
-    previous = values;
-    halved = false;
-    // One linear step on [H G] (G: the effects' columns), column-scaled, by a
-    // rank-revealing orthogonal decomposition; only the effect part is kept,
-    // the base is refitted nonlinearly in the next pass.
-    Index cols = H.cols();
-    std::vector<MatrixXd> G;
-    for (const Effect* e : list) {
-      G.push_back(detail::effect_columns(robot, *e, base, false));
-      cols += G.back().cols();
-    }
-    MatrixXd X(H.rows(), cols);
-    X.leftCols(H.cols()) = H;
-    Index c = H.cols();
-    for (const MatrixXd& g : G) X.middleCols(c, g.cols()) = g, c += g.cols();
-    VectorXd scale(cols);
-    for (Index j = 0; j < cols; ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
-    Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
-    cod.setThreshold(1e-10);
-    cod.compute(X * scale.cwiseInverse().asDiagonal());
-    const VectorXd delta = scale.cwiseInverse().asDiagonal() * cod.solve(y);
-    // Convergence on the effect's contribution to the residual (scaled update).
-    const VectorXd scaled_effect_step = (scale.asDiagonal() * delta).tail(cols - H.cols());
-    c = H.cols();
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      values.values[list[i]->name()] += delta.segment(c, G[i].cols());
-      c += G[i].cols();
-    }
-    rep.passes = pass + 1;
-    if (scaled_effect_step.norm() <= options.tolerance * std::max(1e-9, y.norm())) break;
+  detail::BaseModel base = alternate(robot, data, nodes, list, held, options, values, rep);
+  // Backward elimination: an effect parameter the data cannot tell from the
+  // base and the other effect parameters (|t| not significant, Bonferroni
+  // over the free ones) is held at 0 and the fit repeated. Left free, such a
+  // parameter wanders with the noise along a nearly collinear combination
+  // and drags the base with it (the hybrid's UPS-actuator scale moved an
+  // encoder offset 6 mm on the wrist-scale data, beyond the table's bound).
+  while (options.alpha > 0 && !list.empty()) {
+    const std::optional<HeldParameter> weakest = least_significant(robot, list, held, values, base);
+    if (!weakest || weakest->p_value * double(weakest->free_parameters) < options.alpha) break;
+    held[weakest->effect][weakest->index] = true;
+    values.values[weakest->effect](Index(weakest->index)) = 0.0;
+    rep.held.push_back(*weakest);
+    base = alternate(robot, data, nodes, list, held, options, values, rep);
   }
-  // The base model that goes with the final effect values (the last fit in
-  // the loop may belong to an update that was undone or not yet applied).
-  if (!list.empty())
-    base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
-                            "ols", true);
   MatrixXd H;
   VectorXd y;
   stack(base, false, H, y);

@@ -21,12 +21,26 @@ struct EffectCalibrationOptions {
   std::string estimator;  // "" = the family default (6-UPS ols, hybrid liu); "ols" for the hybrid's OLS
   int max_passes = 6;
   double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)
+  // Backward elimination of effect parameters: while the least significant
+  // free one fails its t test in the joint fit (Bonferroni: p × free < alpha),
+  // it is held at 0 and the fit repeated. 0 keeps every parameter free.
+  double alpha = 0.05;
+};
+
+// An effect parameter held at 0 by the elimination, with its test.
+struct HeldParameter {
+  std::string effect, parameter;
+  std::size_t index = 0;       // in the effect's parameter_names
+  double t = 0;                // estimate / standard error in the joint fit (0: not identifiable)
+  double p_value = 1;          // two-sided, from t² ~ F(1, n − rank)
+  std::size_t free_parameters = 0;  // free effect parameters when it was tested (Bonferroni factor)
 };
 
 struct EffectCalibrationReport {
   int passes = 0;
   std::vector<double> rms_cal_um;  // cal residual RMS per pass (measurement coordinates)
   double rms_cal_um_final = 0, rms_test_um_final = 0;
+  std::vector<HeldParameter> held;  // in the order they were held
 };
 
 // Throws InputError for an unknown effect name, an effect whose inputs the
