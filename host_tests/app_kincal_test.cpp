@@ -337,6 +337,41 @@ TEST(appKincal, IdentifyThenCompensateTheHybrid) {
   EXPECT_LT(after, 10.0);  // 5 µm gauge noise; seed 000 Table 5 reports 30 µm mean after LE on the real machine
 }
 
+TEST(appKincal, IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable) {
+  // The hybrid with a wrist scale (s4, s6): the UPS-actuator scales s1..s3
+  // are nearly collinear with the encoder offsets; left free they move an
+  // offset beyond the table's bound, held (the default) the table is made.
+  const std::string ex = kExamples + "/hybrid-seed000";
+  const std::string meas = kDir + "/hy_scale_meas.csv", model = kDir + "/hy_scale_model.json",
+                    summary = kDir + "/hy_scale_summary.json", free_model = kDir + "/hy_scale_free_model.json";
+  ASSERT_EQ(run_tool("simulate --robot hybrid-seed000 --poses " + ex + "/diagnosis_poses.csv --errors " + ex +
+                     "/errors.csv --effect scale:s4=2e-3 --effect scale:s6=-2e-3 --noise-mm 0.005 --seed 11 --out " + meas)
+                .code,
+            0);
+  const ToolRun id = run_tool("identify --robot hybrid-seed000 --data " + meas + " --effects scale --out " + model +
+                              " --json " + summary);
+  ASSERT_EQ(id.code, 0) << id.err;
+  EXPECT_TRUE(contains(id.out, "held at 0: scale s1 (not significant")) << id.out;
+  EXPECT_FALSE(contains(id.out, "held at 0: scale s4")) << id.out;
+  EXPECT_TRUE(contains(ki::read_text_file(summary), "\"held_at_zero\"")) << summary;
+  const ToolRun table = run_tool("table --model " + model + " --out " + kDir + "/hy_scale_table.hpp");
+  EXPECT_EQ(table.code, 0) << table.err;
+
+  const ToolRun all_free = run_tool("identify --robot hybrid-seed000 --data " + meas +
+                                    " --effects scale --effect-alpha 0 --out " + free_model);
+  ASSERT_EQ(all_free.code, 0) << all_free.err;
+  EXPECT_FALSE(contains(all_free.out, "held at 0")) << all_free.out;
+  const ToolRun refused = run_tool("table --model " + free_model + " --out " + kDir + "/hy_scale_free_table.hpp");
+  EXPECT_NE(refused.code, 0);
+  EXPECT_TRUE(contains(refused.err, "table values")) << refused.err;
+
+  const ToolRun liu = run_tool("identify --robot hybrid-seed000 --data " + meas + " --effects scale --estimator liu --out " +
+                               free_model);
+  EXPECT_NE(liu.code, 0);
+  EXPECT_EQ(lines(liu.err), 1u) << liu.err;
+  EXPECT_TRUE(contains(liu.err, "with --effects")) << liu.err;
+}
+
 namespace {
 
 // MODEL.json, read as text: the estimator's name and a numeric setting (NaN if absent).

@@ -18,9 +18,12 @@ namespace kincal_app {
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
                               double effect_alpha) {
-  if (!estimator.empty() && estimator != (robot.is_hybrid() ? "liu" : "ols") && !(robot.is_hybrid() && estimator == "ols"))
-    throw ki::InputError("--estimator " + estimator + " with --effects: use " +
-                         (robot.is_hybrid() ? "liu (default) or ols" : "ols (default)"));
+  // The passes need the base at its least-squares minimum (docs/diagnosis.md);
+  // seed 000's Liu estimate stays with `identify` without effects.
+  if (!estimator.empty() && estimator != "ols")
+    throw ki::InputError("--estimator " + estimator +
+                         " with --effects: the base model is fitted to its least-squares minimum together with the "
+                         "effects, so the estimator is ols (leave --estimator out)");
   std::vector<std::string> names;
   std::stringstream list(effects);
   for (std::string name; std::getline(list, name, ',');)

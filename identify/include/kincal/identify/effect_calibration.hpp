@@ -18,7 +18,10 @@
 namespace kincal::identify {
 
 struct EffectCalibrationOptions {
-  std::string estimator;  // "" = the family default (6-UPS ols, hybrid liu); "ols" for the hybrid's OLS
+  // The base is fitted to its least-squares minimum in every pass (the
+  // linear effect step assumes it), so "" and "ols" are the same; other
+  // values are ignored (`kincal identify --effects` refuses them).
+  std::string estimator;
   int max_passes = 6;
   double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)
   // Backward elimination of effect parameters: while the least significant
