@@ -419,4 +419,36 @@ TEST(IdentifyWithEffects, ComplianceAndScaleTogetherFitLikeComplianceAlone) {
   EXPECT_NEAR(k(2), 0.3, 0.1);
 }
 
+// The hybrid's base fitted by ridge in the passes (`identify --effects
+// --estimator ridge`): the ill-conditioned source-error combinations stay
+// near the coarse machine, where seed 000's first-order error twist still
+// holds, so compensation comes nearer the noise than with the OLS base.
+TEST(IdentifyWithEffects, HybridRidgeBaseCompensatesBetterThanOls) {
+  const Machine& m = machine("hybrid");
+  ki::EffectCalibrationOptions ridge;
+  ridge.estimator = "ridge";
+  auto compensated_um = [&](const std::string& effect, const ki::EffectCalibrationOptions& options) {
+    const ki::EffectValues truth =
+        effect.empty() ? ki::EffectValues{} : values_of(m.nominal, injected().at("hybrid").at(effect));
+    const ki::PoseTable data = simulate_with(m, truth);
+    const std::vector<std::string> effects = effect.empty() ? std::vector<std::string>{} : std::vector{effect};
+    const ki::CalibrationModel model = ki::calibrate_with_effects(m.nominal, data, effects, options);
+    const std::vector<Vec6<double>> q = compensate_test_rows(model, m.poses);
+    return test_position_rms_um(m, truth, data, &q);
+  };
+  for (const std::string effect : {"", "scale", "backlash", "compliance", "thermal", "cyclic"}) {
+    const double with_ols = compensated_um(effect, {}), with_ridge = compensated_um(effect, ridge);
+    std::printf("  hybrid %s: compensated %.2f um with the OLS base, %.2f um with the ridge base\n",
+                effect.empty() ? "clean" : effect.c_str(), with_ols, with_ridge);
+    if (effect == "compliance") {
+      // The exception (measured 4.56 → 5.36 µm): compliance is 99.9 %
+      // confounded with the base, and its error was offset by the OLS
+      // base's; the pose error still falls from 987 µm.
+      EXPECT_LT(with_ridge, 1.3 * with_ols);
+    } else {
+      EXPECT_LT(with_ridge, 0.6 * with_ols) << effect;
+    }
+  }
+}
+
 }  // namespace

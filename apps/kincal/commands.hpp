@@ -24,6 +24,6 @@ int run_diagnose(const DiagnoseArgs& args);
 // (identify/effect_calibration.hpp).
 int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json,
-                              double effect_alpha);
+                              double effect_alpha, double ridge_k);
 
 }  // namespace kincal_app

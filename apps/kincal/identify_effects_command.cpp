@@ -17,13 +17,7 @@ namespace kincal_app {
 
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
-                              double effect_alpha) {
-  // The passes need the base at its least-squares minimum (docs/diagnosis.md);
-  // seed 000's Liu estimate stays with `identify` without effects.
-  if (!estimator.empty() && estimator != "ols")
-    throw ki::InputError("--estimator " + estimator +
-                         " with --effects: the base model is fitted to its least-squares minimum together with the "
-                         "effects, so the estimator is ols (leave --estimator out)");
+                              double effect_alpha, double ridge_k) {
   std::vector<std::string> names;
   std::stringstream list(effects);
   for (std::string name; std::getline(list, name, ',');)
@@ -34,6 +28,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
   opt.estimator = estimator;
+  opt.ridge_k = ridge_k;
   opt.alpha = effect_alpha;
   ki::EffectCalibrationReport report;
   const ki::CalibrationModel model = ki::calibrate_with_effects(robot, data, names, opt, &report);
@@ -48,6 +43,9 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
                 << " x " << h.free_parameters << " free > alpha " << opt.alpha << ")\n";
   }
   std::cout << "  final: cal " << report.rms_cal_um_final << " um, test " << report.rms_test_um_final << " um\n";
+  if (robot.is_hybrid() && estimator != "ridge")
+    std::cout << "  (hybrid: --estimator ridge keeps the ill-conditioned source errors near the coarse machine and "
+                 "usually compensates nearer the noise; docs/diagnosis.md compares both per effect)\n";
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
   for (const auto& [name, v] : model.effects.values) {
     const std::vector<std::string> pn = ki::find_effect(name)->parameter_names(robot);

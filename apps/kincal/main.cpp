@@ -304,7 +304,17 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
 
 int run_identify(const IdentifyArgs& a) {
   const ki::Robot robot = ki::load_robot(a.robot);
-  if (!a.effects.empty()) return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha);
+  if (!a.effects.empty()) {
+    // --ridge-k with --effects: "gcv" (default) or a number (hkb needs the
+    // linear problem's full-rank OLS, which the passes do not form).
+    if (a.ridge_k == "hkb") throw ki::InputError("--ridge-k hkb with --effects: give gcv or a number");
+    if (!a.ridge_k.empty() && a.estimator != "ridge")
+      throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
+                           (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
+    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);
+    return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
+                                                 k);
+  }
   if (robot.is_hybrid()) {
     ki::PoseTableOptions options;
     options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
@@ -516,7 +526,7 @@ int run(int argc, char** argv) {
   identify->add_option("--robot", ident.robot, "built-in robot name or robot description file")->required();
   identify->add_option("--data", ident.data, "measurement CSV")->required();
   identify->add_option("--out", ident.out, "MODEL.json to write")->required();
-  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr; with --effects always ols")
+  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr; with --effects: ols (default), or ridge on the hybrid")
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
   identify->add_option("--ridge-k", ident.ridge_k,
                        "ridge's k: gcv (generalized cross-validation, default), hkb (Hoerl-Kennard-Baldwin) or a "

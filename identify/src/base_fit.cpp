@@ -56,76 +56,101 @@ BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vec
 }
 
 BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
-                      const std::string& estimator, bool finish) {
-  const HybridFineEstimator fine = estimator == "ols" || finish ? HybridFineEstimator::Ols : HybridFineEstimator::Liu;
+                      const std::string& estimator, bool finish, double ridge_k) {
+  const bool ridge = estimator == "ridge";
+  const HybridFineEstimator fine = ridge                       ? HybridFineEstimator::Ridge
+                                   : estimator == "ols" || finish ? HybridFineEstimator::Ols
+                                                                  : HybridFineEstimator::Liu;
   HybridCalibrationOptions opt;
   const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
-  // Start from seed 000's coarse + fine OLS estimate and finish the
-  // least-squares fit by Gauss–Newton steps on the same identifiable columns:
-  // the fine stage is one linear step from the coarse machine, which leaves
-  // the residual short of its minimum (e.g. 6.3 vs 4.9 µm RMS on the
-  // diagnosis design) and not orthogonal to the columns — the F tests and
-  // the effect fits below need both.
+  // Start from seed 000's coarse + fine estimate and finish the fit by
+  // Gauss–Newton steps on the same identifiable columns: the fine stage is
+  // one linear step from the coarse machine, which leaves the residual short
+  // of its minimum (e.g. 6.3 vs 4.9 µm RMS on the diagnosis design) and not
+  // orthogonal to the columns — the F tests and the effect fits below need
+  // both. "ridge": the minimum of RSS + k·‖χ − χ_coarse‖² (k by seed 000's
+  // fine-stage GCV unless given), the penalised objective reached by
+  // Gauss–Newton on the augmented rows √k·I.
   HybridCompensation comp = cal.compensation(fine);
   if (comp.structural.size() == 0) comp.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
   const HybridGeometry<double>& g0 = robot.hybrid();
   const Index p = Index(cal.kept.size());
+  const double k = !ridge ? 0.0 : ridge_k > 0 ? ridge_k : cal.ridge.ridge_k;
+  VectorXd reference(p);  // the coarse machine: the fine stage's starting point
+  for (Index j = 0; j < p; ++j) {
+    const Index idx = cal.kept[std::size_t(j)];
+    reference(j) = idx < HybridErrorModel::kEncoderCount ? cal.coarse_xi(idx) : 0.0;
+  }
+  auto values_of = [&](const HybridCompensation& c) {
+    VectorXd v(p);
+    for (Index j = 0; j < p; ++j) {
+      const Index idx = cal.kept[std::size_t(j)];
+      v(j) = idx < HybridErrorModel::kEncoderCount ? c.encoder_offsets(idx) : c.structural(idx);
+    }
+    return v;
+  };
   MatrixXd B(6, HybridErrorModel::kParameterCount);
   auto evaluate = [&](BaseModel& base) {
     base.nodes.clear();
     const HybridGeometry<double> gc = comp.controller_geometry();
-    for (std::size_t k = 0; k < data.rows.size(); ++k) {
-      const PoseRow& row = data.rows[k];
-      if (!row.targets || !usable(row) || !en[k]) continue;
+    for (std::size_t kk = 0; kk < data.rows.size(); ++kk) {
+      const PoseRow& row = data.rows[kk];
+      if (!row.targets || !usable(row) || !en[kk]) continue;
       const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
       HybridPassive<double> guess = g0.home;
       Vec6<double> q_ik;
       if (hybrid_ik(g0, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
       Pose<double> predicted;
-      if (hybrid_fk(gc, joints_of(row, *en[k]), guess, predicted).status != Status::Ok) continue;
+      if (hybrid_fk(gc, joints_of(row, *en[kk]), guess, predicted).status != Status::Ok) continue;
       if (comp.model->error_jacobian(commanded, B) != Status::Ok) continue;
       predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
       const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
       NodeData n;
-      n.row = k;
+      n.row = kk;
       n.test = row.role == Role::Test;
       n.r.resize(9);
       for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
       n.M = gauge_map(g0, robot.gauge_radius, predicted);
       n.H.resize(9, p);
       for (Index j = 0; j < p; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
-      n.effect = *en[k];
+      n.effect = *en[kk];
       base.nodes.push_back(std::move(n));
     }
   };
   BaseModel base;
   base.parameters = p;
   int steps = 0;
-  double previous_rss = std::numeric_limits<double>::infinity();
+  double previous_objective = std::numeric_limits<double>::infinity();
   HybridCompensation previous = comp;
-  const int max_steps = finish ? 6 : 0;
-  if (!finish) evaluate(base);
+  const int max_steps = finish || ridge ? 6 : 0;
+  if (max_steps == 0) evaluate(base);
   for (; steps < max_steps; ++steps) {
     evaluate(base);
-    double rss = 0;
-    for (const NodeData& n : base.nodes) rss += n.test ? 0.0 : n.r.squaredNorm();
-    if (rss > previous_rss) {  // a step that does not lower the RSS is undone (the start was the better point)
+    const VectorXd away = values_of(comp) - reference;
+    double objective = k * away.squaredNorm();
+    for (const NodeData& n : base.nodes) objective += n.test ? 0.0 : n.r.squaredNorm();
+    if (objective > previous_objective) {  // a step that does not lower the objective is undone
       comp = previous;
       evaluate(base);
       break;
     }
-    previous_rss = rss;
+    previous_objective = objective;
     previous = comp;
     Index rows = 0;
     for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
-    MatrixXd H(rows, p);
-    VectorXd y(rows);
+    const Index penalty_rows = k > 0 ? p : 0;
+    MatrixXd H(rows + penalty_rows, p);
+    VectorXd y(rows + penalty_rows);
     Index r = 0;
     for (const NodeData& n : base.nodes) {
       if (n.test) continue;
       H.middleRows(r, n.r.size()) = n.H;
       y.segment(r, n.r.size()) = n.r;
       r += n.r.size();
+    }
+    if (k > 0) {
+      H.bottomRows(p) = std::sqrt(k) * MatrixXd::Identity(p, p);
+      y.tail(p) = -std::sqrt(k) * away;
     }
     VectorXd scale(p);
     for (Index j = 0; j < p; ++j) scale(j) = H.col(j).norm() > 0 ? H.col(j).norm() : 1.0;
@@ -142,11 +167,13 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
         comp.structural(idx) += delta(j);
     }
   }
-  if (finish && steps == max_steps) evaluate(base);
+  if (steps == max_steps && max_steps > 0) evaluate(base);
   base.description = "seed 000 coarse + fine model, " + std::to_string(p) + " identifiable of " +
                      std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
-                     (finish ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
-                             : std::string(fine == HybridFineEstimator::Liu ? "Liu" : "OLS"));
+                     (ridge    ? "ridge (k = " + std::to_string(k) + ") finished by " + std::to_string(steps) +
+                                  " Gauss-Newton steps"
+                      : finish ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
+                               : std::string(fine == HybridFineEstimator::Liu ? "Liu" : "OLS"));
   base.model = hybrid_model(robot, cal, fine, data.file);
   for (ModelParameter& mp : base.model.parameters) {
     const int idx = comp.model->index_of(mp.name);
@@ -154,15 +181,18 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     mp.value = idx < HybridErrorModel::kEncoderCount ? comp.encoder_offsets(idx) : comp.structural(idx);
   }
   base.model.settings["gauss_newton_steps"] = double(steps);
+  if (ridge) base.model.settings["ridge_k"] = k;
+  base.ridge_k = k;
+  base.column_away = values_of(comp) - reference;
   return base;
 }
 
 }  // namespace
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
-                   const std::string& estimator, bool finish_least_squares) {
+                   const std::string& estimator, bool finish_least_squares, double ridge_k) {
   return robot.is_stewart() ? stewart_base(robot, fit_data, nodes, estimator)
-                            : hybrid_base(robot, fit_data, nodes, estimator, finish_least_squares);
+                            : hybrid_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
 }
 
 PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,

@@ -37,6 +37,10 @@ struct BaseModel {
   Eigen::Index parameters = 0;
   std::vector<NodeData> nodes;
   CalibrationModel model;  // the fitted base model (no effects)
+  // "ridge" fits (hybrid): the penalty k·‖χ − χ_coarse‖² minimised with the
+  // RSS, and χ − χ_coarse over the design's columns (k = 0 otherwise).
+  double ridge_k = 0;
+  Eigen::VectorXd column_away;
 };
 
 // `fit_data`: the table the base model is fitted on and compared with (the
@@ -46,8 +50,10 @@ struct BaseModel {
 // the coarse machine) is finished by Gauss–Newton steps to the OLS minimum —
 // what a residual diagnosis needs; identification keeps seed 000's estimate
 // (its Liu shrinkage is what keeps the ill-conditioned fit stable).
+// `ridge_k`: with estimator "ridge" (hybrid), the penalty's k; 0 picks it by
+// seed 000's fine-stage GCV.
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
-                   const std::string& estimator = {}, bool finish_least_squares = false);
+                   const std::string& estimator = {}, bool finish_least_squares = false, double ridge_k = 0);
 
 // The table as the effect-free model should see it: q1..q6 := the joints the
 // machine really had (commands + Δq of the joint-space effects), measured

@@ -112,7 +112,9 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
 // columns are left out of the step).
 detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
-                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep) {
+                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep,
+                            double& ridge_k) {
+  const std::string base_estimator = options.estimator == "ridge" ? "ridge" : "ols";
   detail::BaseModel base;
   EffectValues previous = values;
   bool halved = false;
@@ -122,7 +124,8 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
     // The base is fitted to its least-squares minimum (what the linear [H G]
     // step assumes; for the hybrid seed 000's estimate finished by
     // Gauss–Newton), here and for the final model.
-    base = detail::fit_base(robot, corrected, nodes, "ols", true);
+    base = detail::fit_base(robot, corrected, nodes, base_estimator, true, ridge_k);
+    ridge_k = base.ridge_k;
     MatrixXd H;
     VectorXd y;
     stack(base, false, H, y);
@@ -145,7 +148,17 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
     // One linear step on [H G] (G: the effects' free columns), column-scaled,
     // by a rank-revealing orthogonal decomposition; only the effect part is
     // kept, the base is refitted nonlinearly in the next pass.
-    const MatrixXd X = joint_design(robot, list, held, base, H);
+    MatrixXd X = joint_design(robot, list, held, base, H);
+    if (ridge_k > 0) {
+      // The base's penalty rows √k·(χ − χ_coarse): the step minimises the
+      // same objective as the base fit (effects unpenalised).
+      const Index p = base.parameters, n = X.rows();
+      X.conservativeResize(n + p, Eigen::NoChange);
+      X.bottomRows(p).setZero();
+      X.bottomLeftCorner(p, p) = std::sqrt(ridge_k) * MatrixXd::Identity(p, p);
+      y.conservativeResize(n + p);
+      y.tail(p) = -std::sqrt(ridge_k) * base.column_away;
+    }
     VectorXd scale(X.cols());
     for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
     Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
@@ -168,7 +181,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   // the loop may belong to an update that was undone or not yet applied).
   if (!list.empty())
     base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
-                            "ols", true);
+                            base_estimator, true, ridge_k);
   return base;
 }
 
@@ -184,6 +197,11 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     if (!missing.empty()) throw InputError(data.file, 0, 0, "effect '" + name + "' cannot be identified: " + missing);
     list.push_back(e);
   }
+  if (!options.estimator.empty() && options.estimator != "ols" &&
+      !(options.estimator == "ridge" && robot.is_hybrid()))
+    throw InputError("--estimator " + options.estimator + " with --effects: the base is fitted by " +
+                     (robot.is_hybrid() ? "ols (default) or ridge" : "ols (seed 001's iterated least squares)"));
+  if (!(options.ridge_k >= 0)) throw InputError("--ridge-k must be a number >= 0 (0: by GCV)");
   const std::vector<std::optional<EffectNode>> nodes = effect_nodes(robot, data);
   EffectValues values;
   std::map<std::string, std::vector<bool>> held;
@@ -194,7 +212,10 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   }
 
   EffectCalibrationReport rep;
-  detail::BaseModel base = alternate(robot, data, nodes, list, held, options, values, rep);
+  // Hybrid ridge base: k as given, else chosen by GCV in the first base fit,
+  // then kept (every pass minimises the same objective).
+  double ridge_k = options.ridge_k;
+  detail::BaseModel base = alternate(robot, data, nodes, list, held, options, values, rep, ridge_k);
   // Backward elimination: an effect parameter the data cannot tell from the
   // base and the other effect parameters (|t| not significant, Bonferroni
   // over the free ones) is held at 0 and the fit repeated. Left free, such a
@@ -207,7 +228,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     held[weakest->effect][weakest->index] = true;
     values.values[weakest->effect](Index(weakest->index)) = 0.0;
     rep.held.push_back(*weakest);
-    base = alternate(robot, data, nodes, list, held, options, values, rep);
+    base = alternate(robot, data, nodes, list, held, options, values, rep, ridge_k);
   }
   MatrixXd H;
   VectorXd y;

@@ -18,10 +18,15 @@
 namespace kincal::identify {
 
 struct EffectCalibrationOptions {
-  // The base is fitted to its least-squares minimum in every pass (the
-  // linear effect step assumes it), so "" and "ols" are the same; other
-  // values are ignored (`kincal identify --effects` refuses them).
+  // The base model in every pass: "" or "ols", its least-squares minimum
+  // (the linear effect step assumes a minimum); "ridge" (hybrid only), the
+  // minimum of RSS + k·‖χ − χ_coarse‖² over seed 000's identifiable source
+  // errors, effects unpenalised. Ridge keeps the ill-conditioned directions
+  // near the coarse machine, where seed 000's first-order error twist still
+  // describes the machine (docs/diagnosis.md, measured per effect). Other
+  // values throw InputError.
   std::string estimator;
+  double ridge_k = 0;  // "ridge": the penalty's k; 0 chooses it by seed 000's fine-stage GCV
   int max_passes = 6;
   double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)
   // Backward elimination of effect parameters: while the least significant
