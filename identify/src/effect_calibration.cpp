@@ -37,7 +37,6 @@ void stack(const detail::BaseModel& base, bool test, MatrixXd& H, VectorXd& y) {
   }
 }
 
-
 // [H G]: the base design and the columns of the effect parameters not held.
 MatrixXd joint_design(const Robot& robot, const std::vector<const Effect*>& list,
                       const std::map<std::string, std::vector<bool>>& held, const detail::BaseModel& base,
@@ -62,6 +61,9 @@ MatrixXd joint_design(const Robot& robot, const std::vector<const Effect*>& list
 // The free effect parameter with the largest p-value of its t test in the
 // joint least-squares fit at the solution (t² ~ F(1, n − rank)); a parameter
 // whose column is zero or lies in the span of the others (p = 1) first.
+// With the hybrid's ridge base the test still uses the unpenalised design:
+// it asks whether the data can tell the parameter from every base
+// combination, not only from those the penalty allows.
 std::optional<HeldParameter> least_significant(const Robot& robot, const std::vector<const Effect*>& list,
                                                const std::map<std::string, std::vector<bool>>& held,
                                                const EffectValues& values, const detail::BaseModel& base) {
