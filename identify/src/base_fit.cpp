@@ -75,7 +75,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   if (comp.structural.size() == 0) comp.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
   const HybridGeometry<double>& g0 = robot.hybrid();
   const Index p = Index(cal.kept.size());
-  const double k = !ridge ? 0.0 : ridge_k > 0 ? ridge_k : cal.ridge.ridge_k;
+  const double penalty = !ridge ? 0.0 : ridge_k > 0 ? ridge_k : cal.ridge.ridge_k;
   VectorXd reference(p);  // the coarse machine: the fine stage's starting point
   for (Index j = 0; j < p; ++j) {
     const Index idx = cal.kept[std::size_t(j)];
@@ -93,27 +93,27 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   auto evaluate = [&](BaseModel& base) {
     base.nodes.clear();
     const HybridGeometry<double> gc = comp.controller_geometry();
-    for (std::size_t kk = 0; kk < data.rows.size(); ++kk) {
-      const PoseRow& row = data.rows[kk];
-      if (!row.targets || !usable(row) || !en[kk]) continue;
+    for (std::size_t k = 0; k < data.rows.size(); ++k) {
+      const PoseRow& row = data.rows[k];
+      if (!row.targets || !usable(row) || !en[k]) continue;
       const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
       HybridPassive<double> guess = g0.home;
       Vec6<double> q_ik;
       if (hybrid_ik(g0, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
       Pose<double> predicted;
-      if (hybrid_fk(gc, joints_of(row, *en[kk]), guess, predicted).status != Status::Ok) continue;
+      if (hybrid_fk(gc, joints_of(row, *en[k]), guess, predicted).status != Status::Ok) continue;
       if (comp.model->error_jacobian(commanded, B) != Status::Ok) continue;
       predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
       const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
       NodeData n;
-      n.row = kk;
+      n.row = k;
       n.test = row.role == Role::Test;
       n.r.resize(9);
       for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
       n.M = gauge_map(g0, robot.gauge_radius, predicted);
       n.H.resize(9, p);
       for (Index j = 0; j < p; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
-      n.effect = *en[kk];
+      n.effect = *en[k];
       base.nodes.push_back(std::move(n));
     }
   };
@@ -127,7 +127,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   for (; steps < max_steps; ++steps) {
     evaluate(base);
     const VectorXd away = values_of(comp) - reference;
-    double objective = k * away.squaredNorm();
+    double objective = penalty * away.squaredNorm();
     for (const NodeData& n : base.nodes) objective += n.test ? 0.0 : n.r.squaredNorm();
     if (objective > previous_objective) {  // a step that does not lower the objective is undone
       comp = previous;
@@ -138,7 +138,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     previous = comp;
     Index rows = 0;
     for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
-    const Index penalty_rows = k > 0 ? p : 0;
+    const Index penalty_rows = penalty > 0 ? p : 0;
     MatrixXd H(rows + penalty_rows, p);
     VectorXd y(rows + penalty_rows);
     Index r = 0;
@@ -148,9 +148,9 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
       y.segment(r, n.r.size()) = n.r;
       r += n.r.size();
     }
-    if (k > 0) {
-      H.bottomRows(p) = std::sqrt(k) * MatrixXd::Identity(p, p);
-      y.tail(p) = -std::sqrt(k) * away;
+    if (penalty > 0) {
+      H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
+      y.tail(p) = -std::sqrt(penalty) * away;
     }
     VectorXd scale(p);
     for (Index j = 0; j < p; ++j) scale(j) = H.col(j).norm() > 0 ? H.col(j).norm() : 1.0;
@@ -170,7 +170,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   if (steps == max_steps && max_steps > 0) evaluate(base);
   base.description = "seed 000 coarse + fine model, " + std::to_string(p) + " identifiable of " +
                      std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
-                     (ridge    ? "ridge (k = " + std::to_string(k) + ") finished by " + std::to_string(steps) +
+                     (ridge    ? "ridge (k = " + std::to_string(penalty) + ") finished by " + std::to_string(steps) +
                                   " Gauss-Newton steps"
                       : finish ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
                                : std::string(fine == HybridFineEstimator::Liu ? "Liu" : "OLS"));
@@ -181,8 +181,8 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     mp.value = idx < HybridErrorModel::kEncoderCount ? comp.encoder_offsets(idx) : comp.structural(idx);
   }
   base.model.settings["gauss_newton_steps"] = double(steps);
-  if (ridge) base.model.settings["ridge_k"] = k;
-  base.ridge_k = k;
+  if (ridge) base.model.settings["ridge_k"] = penalty;
+  base.ridge_k = penalty;
   base.column_away = values_of(comp) - reference;
   return base;
 }
