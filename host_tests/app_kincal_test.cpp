@@ -509,3 +509,50 @@ TEST(appKincal, IdentifyTheHybridWithRidgeOwnCoarseLayerAndAMisSeatedTarget) {
   EXPECT_TRUE(contains(ki::read_text_file(summary), "\"outliers\": []")) << ki::read_text_file(summary);
   EXPECT_TRUE(ModelText(model).estimator("pcr"));
 }
+
+// Every command `kincal --help` names exists (a help that names a missing
+// command is a bug: `effects` was named before it existed), and `kincal
+// effects` lists each registered effect with its parameters and inputs.
+TEST(appKincal, HelpNamesOnlyCommandsThatExist) {
+  const ToolRun help = run_tool("--help");
+  ASSERT_EQ(help.code, 0) << help.err;
+  std::vector<std::string> named;
+  std::istringstream in(help.out);
+  bool in_commands = false;
+  for (std::string line; std::getline(in, line);) {
+    if (contains(line, "SUBCOMMANDS") || contains(line, "Subcommands")) {
+      in_commands = true;
+      continue;
+    }
+    std::istringstream words(line);
+    std::string first;
+    if (in_commands && (words >> first) && line.rfind("  ", 0) == 0) named.push_back(first);
+  }
+  ASSERT_GE(named.size(), 8u) << help.out;
+  for (const std::string& cmd : named) {
+    const ToolRun r = run_tool(cmd + " --help");
+    EXPECT_EQ(r.code, 0) << cmd << ": " << r.err;
+  }
+  // And the commands the option texts point to are among them.
+  for (const char* cmd : {"effects", "table", "diagnose", "compensate"})
+    EXPECT_NE(std::find(named.begin(), named.end(), cmd), named.end()) << cmd;
+}
+
+TEST(appKincal, EffectsListsEveryEffectWithItsParametersAndInputs) {
+  const ToolRun text = run_tool("effects");
+  ASSERT_EQ(text.code, 0) << text.err;
+  for (const char* e : {"scale:", "backlash:", "compliance:", "thermal:", "cyclic:"})
+    EXPECT_TRUE(contains(text.out, std::string("\n") + e)) << e << "\n" << text.out;
+  EXPECT_TRUE(contains(text.out, "parameters: s1 s2 s3 s4 s5 s6")) << text.out;
+  EXPECT_TRUE(contains(text.out, "needs: temp")) << text.out;
+  // The hybrid's screw drives only its three UPS limbs: cyclic has a1..a3, b1..b3.
+  const ToolRun json = run_tool("effects --robot hybrid-seed000 --json");
+  ASSERT_EQ(json.code, 0) << json.err;
+  EXPECT_TRUE(contains(json.out, "\"robot\": \"hybrid-seed000\"")) << json.out;
+  EXPECT_TRUE(contains(json.out, "\"a3\"")) << json.out;
+  EXPECT_FALSE(contains(json.out, "\"a4\"")) << json.out;
+  EXPECT_TRUE(contains(json.out, "dir1..dir6")) << json.out;
+  const ToolRun bad = run_tool("effects --robot no-such-robot");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_EQ(lines(bad.err), 1u) << bad.err;
+}

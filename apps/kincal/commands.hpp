@@ -20,6 +20,14 @@ struct DiagnoseArgs {
 CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& args);
 int run_diagnose(const DiagnoseArgs& args);
 
+// `kincal effects`: the registered effects, their parameters and inputs.
+struct EffectsArgs {
+  std::string robot;
+  bool json = false;
+};
+CLI::App* add_effects_command(CLI::App& app, EffectsArgs& args);
+int run_effects(const EffectsArgs& args);
+
 // `kincal identify --effects e1,e2`: base model and effects together
 // (identify/effect_calibration.hpp).
 int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,

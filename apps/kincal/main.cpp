@@ -566,6 +566,8 @@ int run(int argc, char** argv) {
 
   kincal_app::DiagnoseArgs diag;
   CLI::App* diagnose = kincal_app::add_diagnose_command(app, diag);
+  kincal_app::EffectsArgs effects_args;
+  CLI::App* effects = kincal_app::add_effects_command(app, effects_args);
 
   std::string table_model, table_out;
   CLI::App* table = app.add_subcommand(
@@ -579,7 +581,7 @@ int run(int argc, char** argv) {
     for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == first;
     if (!known) {
       std::cerr << "kincal: unknown command '" << first
-                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table; run 'kincal --help')\n";
+                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table, effects; run 'kincal --help')\n";
       return kExitUsage;
     }
   }
@@ -603,6 +605,7 @@ int run(int argc, char** argv) {
   if (*diagnose) return kincal_app::run_diagnose(diag);
   if (*compensate) return run_compensate(comp_robot, comp_model, comp_poses, comp_out);
   if (*table) return run_table(table_model, table_out);
+  if (*effects) return kincal_app::run_effects(effects_args);
   return kExitUsage;
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
@@ -30,7 +31,7 @@ BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vec
                        const std::string& estimator) {
   (void)estimator;  // seed 001's model is fitted by OLS
   const StewartCalibration cal = calibrate_stewart(robot, data);
-  const StewartGeometry<double> g = stewart_with_errors(robot.stewart(), cal.theta);
+  const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits
   BaseModel base;
   base.description = "seed 001 42-parameter model (iterated LS, " + std::to_string(cal.history.size()) + " rounds)";
   base.parameters = kStewartParameterCount;
@@ -73,7 +74,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   // Gauss–Newton on the augmented rows √k·I.
   HybridCompensation comp = cal.compensation(fine);
   if (comp.structural.size() == 0) comp.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
-  const HybridGeometry<double>& g0 = robot.hybrid();
+  const HybridGeometry<double> g0 = without_limits(robot.hybrid());  // measured rows: no limits
   const Index p = Index(cal.kept.size());
   const double penalty = !ridge ? 0.0 : ridge_k > 0 ? ridge_k : cal.ridge.ridge_k;
   VectorXd reference(p);  // the coarse machine: the fine stage's starting point
@@ -92,7 +93,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   MatrixXd B(6, HybridErrorModel::kParameterCount);
   auto evaluate = [&](BaseModel& base) {
     base.nodes.clear();
-    const HybridGeometry<double> gc = comp.controller_geometry();
+    const HybridGeometry<double> gc = without_limits(comp.controller_geometry());
     for (std::size_t k = 0; k < data.rows.size(); ++k) {
       const PoseRow& row = data.rows[k];
       if (!row.targets || !usable(row) || !en[k]) continue;

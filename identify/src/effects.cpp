@@ -1,3 +1,4 @@
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/effects.hpp"
 
 #include <algorithm>
@@ -47,6 +48,7 @@ class ScaleEffect final : public JointEffect {
   std::string description() const override { return "encoder / leadscrew scale error per actuated joint, dq_i = s_i q_i"; }
   std::vector<std::string> parameter_names(const Robot&) const override { return numbered("s", 6); }
   std::string missing_inputs(const PoseTable&) const override { return {}; }
+  std::string inputs() const override { return "joint commands q1..q6 (default: nominal IK of the commanded pose)"; }
 
  protected:
   double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
@@ -68,6 +70,9 @@ class BacklashEffect final : public JointEffect {
     if (!data.has_dir && data.rows.size() < 2) return "no dir1..dir6 columns and too few rows to derive directions";
     return {};
   }
+  std::string inputs() const override {
+    return "approach directions dir1..dir6 (default: derived from the command sequence, rows in motion order)";
+  }
 
  protected:
   double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
@@ -84,6 +89,7 @@ class ComplianceEffect final : public JointEffect {
   }
   std::vector<std::string> parameter_names(const Robot&) const override { return numbered("k", 6); }
   std::string missing_inputs(const PoseTable&) const override { return {}; }
+  std::string inputs() const override { return "the commanded pose (static load through the Jacobian)"; }
 
  protected:
   double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
@@ -104,6 +110,9 @@ class CyclicEffect final : public JointEffect {
     return out;
   }
   std::string missing_inputs(const PoseTable&) const override { return {}; }
+  std::string inputs() const override {
+    return "joint commands q1..qN of the screw-driven joints (default: nominal IK); the robot's screw_lead";
+  }
 
  protected:
   int joint_of(const Robot& robot, int k) const override { return k % screw_joint_count(robot); }
@@ -128,6 +137,7 @@ class ThermalEffect final : public Effect {
     return "uniform thermal expansion of structure and actuators, lengths x (1 + c (T - 20 C))";
   }
   std::vector<std::string> parameter_names(const Robot&) const override { return {"c"}; }
+  std::string inputs() const override { return "temp (structure temperature, C), varying over the data set"; }
   std::string missing_inputs(const PoseTable& data) const override {
     if (!data.has_temp) return "the data has no temp column";
     double lo = 1e300, hi = -1e300;
@@ -218,13 +228,15 @@ bool forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>
 
 std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const PoseTable& table) {
   const EffectParameters<double> frame = effect_frame(robot);
+  // Nodes of measured rows: the file's joint limits do not apply (joint_limits.hpp).
+  const Robot open = without_limits(robot);
   std::vector<std::optional<EffectNode>> nodes(table.rows.size());
   for (std::size_t k = 0; k < table.rows.size(); ++k) {
     const PoseRow& row = table.rows[k];
     EffectNode n;
     n.pose = Pose<double>::from_xyz_rpy(row.commanded);
     Vec6<double> q_ik;
-    if (!forward_jacobian(robot, n.pose, q_ik, n.joint_twist)) continue;
+    if (!forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
     n.q = row.q ? Vec6<double>(row.q->head<6>()) : q_ik;
     n.inputs.load = static_load_forward(n.joint_twist, frame.load_direction);
     n.temperature = row.temp;

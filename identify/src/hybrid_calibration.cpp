@@ -1,5 +1,6 @@
 // Seed 000 Section 4.3: coarse (Eq. (15)) + fine (Liu) calibration of the
 // hybrid robot, compensation (Eq. (16)), Monte Carlo η (Eqs. (17)–(18)).
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 
 #include <Eigen/QR>
@@ -169,7 +170,9 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   if (!(nominal.gauge_radius > 0)) throw InputError("hybrid calibration: the robot has no gauge radius");
   if (!(options.eps_xi > 0) || options.max_coarse_iterations < 1)
     throw InputError("hybrid calibration: eps_xi must be > 0 and max_coarse_iterations >= 1");
-  const HybridGeometry<double>& g0 = nominal.hybrid();
+  // Measured rows are modelled without the file's limits (joint_limits.hpp);
+  // the result keeps the robot's own (out.nominal, the compensation).
+  const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   const double radius = nominal.gauge_radius;
   const std::vector<Node> nodes = gauge_nodes(g0, data, [](const PoseRow& row) { return row.role == Role::Cal; });
   const Index N = static_cast<Index>(nodes.size());
@@ -192,7 +195,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   const Index Nc = static_cast<Index>(coarse.size());
 
   HybridCalibration out;
-  out.nominal = g0;
+  out.nominal = nominal.hybrid();
   out.options = options;
   out.gauge_radius = radius;
   out.cal_nodes = nodes.size();
@@ -369,7 +372,7 @@ IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const Hybr
                                                 const HintOptions& options) {
   if (!nominal.is_hybrid()) throw InputError("hybrid_identifiability_hint needs a hybrid robot");
   if (!cal.fine_done || cal.fine_poses.empty()) return {};
-  const HybridGeometry<double>& g0 = nominal.hybrid();
+  const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   const double radius = nominal.gauge_radius;
   const HybridErrorModel model(g0);
   // The fine stage's rows at a pose: gauge map × B (Eq. (9)), all 150 columns.
@@ -596,8 +599,9 @@ HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model)
 
 PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation* compensation, const PoseTable& data) {
   if (!nominal.is_hybrid()) throw InputError("hybrid_residuals needs a hybrid robot");
-  const HybridGeometry<double>& g0 = nominal.hybrid();
-  const HybridGeometry<double> g = compensation != nullptr ? compensation->controller_geometry() : g0;
+  // Residuals of measured rows: no joint limits (joint_limits.hpp).
+  const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
+  const HybridGeometry<double> g = compensation != nullptr ? without_limits(compensation->controller_geometry()) : g0;
   const bool structural = compensation != nullptr && compensation->structural.size() > 0;
   MatrixXd B(6, HybridErrorModel::kParameterCount);
   std::vector<PoseErrorRow> rows;

@@ -1,3 +1,4 @@
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 
 #include <algorithm>
@@ -57,7 +58,10 @@ void chain_error_adjoints(const HybridChainFrames& frames, const Vec3<double>& P
 }
 
 HybridErrorModel::HybridErrorModel(const HybridGeometry<double>& nominal, const HybridErrorModelOptions& options)
-    : g_(nominal), opt_(options) {
+    // The error model describes the machine wherever it was measured: the
+    // file's joint limits (the controller's business) do not apply here
+    // (joint_limits.hpp).
+    : g_(without_limits(nominal)), opt_(options) {
   if (!(std::isfinite(opt_.up_split))) throw InputError("hybrid error model: the UP split e must be finite");
   const Vec3d ex = Vec3d::UnitX(), ey = Vec3d::UnitY(), ez = Vec3d::UnitZ();
   const double c_ref = g_.home.extension, e = opt_.up_split;

@@ -1,3 +1,4 @@
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 
 #include <algorithm>
@@ -111,7 +112,10 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   if (options.estimator.kind == EstimatorKind::Liu)
     throw InputError("the 6-UPS calibration (seed 001) offers the estimators ols, ridge and pcr; liu is seed 000's "
                      "estimator for the hybrid's fine stage");
-  const std::vector<Node> nodes = calibration_nodes(nominal, data);
+  // Measured rows are modelled without the file's limits (joint_limits.hpp):
+  // the machine was there. MODEL.json keeps the robot as given (stewart_model).
+  const Robot open = without_limits(nominal);
+  const std::vector<Node> nodes = calibration_nodes(open, data);
   const int m = kStewartParameterCount;
   const Eigen::Index n = Eigen::Index(6 * nodes.size());
   const std::vector<std::string> names = parameter_names(nominal);
@@ -126,7 +130,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   for (int it = 0;; ++it) {
     // Steps 3–4 / 7–8: poses of the machine as currently believed, and the
     // residual pose errors dQ = QM − QC.
-    const StewartGeometry<double> g = stewart_with_errors(nominal.stewart(), out.theta);
+    const StewartGeometry<double> g = stewart_with_errors(open.stewart(), out.theta);
     StewartIteration rec;
     rec.iteration = it;
     double sum_p2 = 0;
@@ -206,7 +210,9 @@ StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTabl
   return out;
 }
 
-PoseErrorReport stewart_residuals(const Robot& nominal, const Robot& robot, const PoseTable& data) {
+PoseErrorReport stewart_residuals(const Robot& nominal_robot, const Robot& calibrated, const PoseTable& data) {
+  // Residuals of measured rows: no joint limits (joint_limits.hpp).
+  const Robot nominal = without_limits(nominal_robot), robot = without_limits(calibrated);
   PoseTable predicted = data;  // "commanded" := the model's prediction, so pose_errors gives measured − predicted
   for (PoseRow& r : predicted.rows) {
     if (!r.measured) continue;

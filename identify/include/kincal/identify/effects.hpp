@@ -40,6 +40,10 @@ class Effect {
   // "" when the data carries what the effect needs; else why it cannot be
   // tested (e.g. "no temp column"), one phrase.
   virtual std::string missing_inputs(const PoseTable& data) const = 0;
+  // The columns of the measurement CSV the effect reads, one phrase, for
+  // `kincal effects` (docs/formats.md names them). Most effects need only the
+  // commanded pose (and the joint commands derived from it).
+  virtual std::string inputs() const { return "the commanded pose (x..rz)"; }
   // Tool twist per unit parameter at one node: 6 × parameter_names().size().
   virtual void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
                              Eigen::Ref<Eigen::MatrixXd> columns) const = 0;

@@ -1,0 +1,173 @@
+// Issue #11 item 1: a measured row is a fact, whatever the robot file's
+// limits say. Identification and residuals accept rows whose joint commands
+// lie past the file's stroke, warn once per row and joint (by how much), and
+// the model keeps the file's limits for the controller.
+//
+// How this data differs from the rest of the suite: random poses (no grid,
+// no layer / dir / q columns) on the seed 001 geometry with tilts of up to
+// ±5° and z up to 225 mm (the suite's grids stay inside the stroke); the
+// hybrid beyond its task cuboid (x, y up to ±330 mm, z down to −130 mm). The
+// measurements are made here with core's FK on geometries whose limits the
+// test opens by hand — not by `simulate`, which shares the code under test.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/stewart.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/pose_errors.hpp"
+#include "kincal/identify/robot.hpp"
+#include "kincal/identify/simulate.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+
+namespace ki = kincal::identify;
+using kincal::Pose;
+using kincal::Status;
+using kincal::Vec6;
+
+namespace {
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+// ±1e6 by hand: the generator does not use the library's without_limits.
+kincal::StewartGeometry<double> opened(kincal::StewartGeometry<double> g) {
+  g.min_length.setConstant(-1e6);
+  g.max_length.setConstant(1e6);
+  return g;
+}
+kincal::HybridGeometry<double> opened(kincal::HybridGeometry<double> g) {
+  g.min_joint.setConstant(-1e6);
+  g.max_joint.setConstant(1e6);
+  g.max_extension = 1e6;
+  return g;
+}
+
+// 42 errors of ~30 µm, drawn (not seed 001's Table 3).
+Eigen::VectorXd random_errors(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-0.03, 0.03);
+  Eigen::VectorXd e(42);
+  for (auto& v : e) v = u(rng);
+  return e;
+}
+
+}  // namespace
+
+TEST(identifyJointLimits, SixUpsRowsPastTheStrokeAreIdentifiedAndWarnedAbout) {
+  const ki::Robot robot = ki::builtin_robot("stewart-seed001");
+  const auto& g = robot.stewart();
+  std::mt19937_64 rng(1107);
+  const Eigen::VectorXd truth = random_errors(rng);
+  const kincal::StewartGeometry<double> actual = opened(ki::stewart_with_errors(g, truth));
+  const kincal::StewartGeometry<double> nominal_open = opened(g);
+  std::uniform_real_distribution<double> xy(-60, 60), z(190, 228), tilt(-5 * M_PI / 180, 5 * M_PI / 180);
+  ki::PoseTable data;
+  data.file = "past-stroke.csv";
+  data.has_measured = true;
+  int past = 0;
+  for (int k = 0; data.rows.size() < 60; ++k) {
+    ki::PoseRow r;
+    r.id = "r" + std::to_string(k);
+    r.line = std::size_t(k + 2);
+    r.commanded << xy(rng), xy(rng), z(rng), tilt(rng), tilt(rng), tilt(rng);
+    Vec6<double> q;
+    if (kincal::stewart_ik(nominal_open, Pose<double>::from_xyz_rpy(r.commanded), q) != Status::Ok) continue;
+    Pose<double> reached;
+    ASSERT_EQ(kincal::stewart_fk(actual, q, Pose<double>::from_xyz_rpy(r.commanded), reached).status, Status::Ok);
+    r.measured = reached.to_xyz_rpy();
+    if ((q.array() > g.max_length.array()).any() || (q.array() < g.min_length.array()).any()) ++past;
+    if (k % 5 == 4) r.role = ki::Role::Test;
+    data.rows.push_back(r);
+  }
+  ASSERT_GE(past, 5) << "the data must reach past the stroke (283.24 mm)";
+
+  // Warned: once per row and joint outside, with the amount.
+  const std::vector<std::string> warnings = ki::joint_limit_warnings(robot, data);
+  ASSERT_GE(warnings.size(), std::size_t(past));
+  for (const std::string& w : warnings) {
+    EXPECT_TRUE(contains(w, "past-stroke.csv:")) << w;
+    EXPECT_TRUE(contains(w, "above its limit 283.") || contains(w, "below its limit 183.")) << w;
+    EXPECT_TRUE(contains(w, "the row is used")) << w;
+    EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+  }
+
+  // Identified (it threw "FK of the corrected machine failed (out of limits)" before).
+  ki::StewartCalibration c;
+  ASSERT_NO_THROW(c = ki::calibrate_stewart(robot, data)) << "rows past the stroke must be accepted";
+  EXPECT_LT((c.theta - truth).lpNorm<Eigen::Infinity>(), 1e-6) << "noise-free: the truth to rounding";
+  // Residuals on every row (none skipped), the test rows at rounding level.
+  const ki::CalibrationModel model = ki::stewart_model(robot, c, data.file);
+  const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
+  EXPECT_EQ(after.all.count, data.rows.size());
+  EXPECT_LT(after.all.max_position_mm, 1e-6);
+  // The effects' nodes exist for every row too (diagnosis, identify --effects).
+  for (const auto& n : ki::effect_nodes(robot, data)) EXPECT_TRUE(n.has_value());
+
+  // The model keeps the file's limits: the controller still enforces them.
+  EXPECT_EQ(model.nominal.stewart().max_length, g.max_length);
+  EXPECT_EQ(model.nominal.stewart().min_length, g.min_length);
+}
+
+TEST(identifyJointLimits, HybridRowsPastTheStrokeAreIdentified) {
+  const ki::Robot robot = ki::builtin_robot("hybrid-seed000");
+  const auto& g = robot.hybrid();
+  // Encoder offsets only (0.3 mm, 0.5 mrad): the coarse stage's parameters.
+  Vec6<double> xi;
+  xi << 0.3, -0.25, 0.2, 5e-4, -4e-4, 3e-4;
+  kincal::HybridGeometry<double> actual = opened(g);
+  actual.joint_offset += xi;
+  const kincal::HybridGeometry<double> nominal_open = opened(g);
+  std::mt19937_64 rng(2211);
+  std::uniform_real_distribution<double> xy(-400, 400), z(-160, 80);
+  ki::PoseTable data;
+  data.file = "beyond-cuboid.csv";
+  data.has_targets = true;
+  int past = 0;
+  for (int k = 0; data.rows.size() < 40 && k < 10000; ++k) {
+    ki::PoseRow r;
+    r.id = "h" + std::to_string(k);
+    r.line = std::size_t(k + 2);
+    r.commanded << xy(rng), xy(rng), z(rng), 0, 0, 0;
+    Vec6<double> q;
+    kincal::HybridPassive<double> passive = nominal_open.home;
+    if (kincal::hybrid_ik(nominal_open, Pose<double>::from_xyz_rpy(r.commanded), q, nullptr, &passive) != Status::Ok)
+      continue;
+    Pose<double> tool;
+    if (kincal::hybrid_fk(actual, q, passive, tool).status != Status::Ok) continue;
+    r.targets = ki::gauge_targets(g, robot.gauge_radius, tool);
+    if ((q.array() > g.max_joint.array()).any() || (q.array() < g.min_joint.array()).any()) ++past;
+    data.rows.push_back(r);
+  }
+  ASSERT_EQ(data.rows.size(), 40u);
+  ASSERT_GE(past, 3) << "the data must reach past the UPS stroke (628-1178 mm)";
+  EXPECT_GE(ki::joint_limit_warnings(robot, data).size(), std::size_t(past));
+
+  ki::HybridCalibration c;
+  ASSERT_NO_THROW(c = ki::calibrate_hybrid(robot, data)) << "rows past the stroke must be accepted";
+  EXPECT_LT((c.coarse_xi - xi).head<3>().lpNorm<Eigen::Infinity>(), 1e-6);
+  EXPECT_LT((c.coarse_xi - xi).tail<3>().lpNorm<Eigen::Infinity>(), 1e-8);
+  // The calibration keeps the file's limits for the controller.
+  EXPECT_EQ(c.nominal.max_joint, g.max_joint);
+  const ki::HybridCompensation comp = c.compensation();
+  const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
+  EXPECT_EQ(after.all.count, data.rows.size()) << "no row skipped";
+}
+
+TEST(identifyJointLimits, RowsInsideTheLimitsGiveNoWarning) {
+  const ki::Robot robot = ki::builtin_robot("stewart-seed001");
+  ki::PoseTable data;
+  data.file = "inside.csv";
+  ki::PoseRow r;
+  r.id = "home";
+  r.commanded << 0, 0, 200, 0, 0, 0;
+  data.rows.push_back(r);
+  EXPECT_TRUE(ki::joint_limit_warnings(robot, data).empty());
+  // A given q past the stroke is judged as given (not the IK's).
+  r.q = Eigen::VectorXd::Constant(6, 290.0);
+  data.rows.push_back(r);
+  EXPECT_EQ(ki::joint_limit_warnings(robot, data).size(), 6u);
+}

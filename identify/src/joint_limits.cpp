@@ -1,0 +1,86 @@
+#include "kincal/identify/joint_limits.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace kincal::identify {
+
+namespace {
+
+constexpr double kOpen = 1e9;  // hybrid.hpp's default "no limit"
+
+std::string amount(double v, const char* unit) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v << " " << unit;
+  return s.str();
+}
+
+// "q3 = 286.6 mm is 3.36 mm above its limit 283.24 mm", or "" inside.
+std::string outside(const std::string& name, double v, double lo, double hi, const char* unit) {
+  if (v >= lo && v <= hi) return {};
+  const bool above = v > hi;
+  return name + " = " + amount(v, unit) + " is " + amount(above ? v - hi : lo - v, unit) +
+         (above ? " above its limit " : " below its limit ") + amount(above ? hi : lo, unit);
+}
+
+}  // namespace
+
+StewartGeometry<double> without_limits(StewartGeometry<double> g) {
+  g.min_length.setConstant(-kOpen);
+  g.max_length.setConstant(kOpen);
+  return g;
+}
+
+HybridGeometry<double> without_limits(HybridGeometry<double> g) {
+  g.min_joint.setConstant(-kOpen);
+  g.max_joint.setConstant(kOpen);
+  g.min_extension = 0;  // c = |A0 A64| > 0: a geometric floor, not a stroke
+  g.max_extension = kOpen;
+  return g;
+}
+
+Robot without_limits(Robot robot) {
+  std::visit([](auto& g) { g = without_limits(g); }, robot.geometry);
+  return robot;
+}
+
+std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTable& data) {
+  const Robot open = without_limits(robot);
+  std::vector<std::string> out;
+  for (const PoseRow& r : data.rows) {
+    Vec6<double> q;
+    if (r.q && r.q->size() >= 6) {
+      q = r.q->head<6>();
+    } else if (open.inverse(Pose<double>::from_xyz_rpy(r.commanded), q) != Status::Ok) {
+      continue;
+    }
+    const std::string where = data.file + ":" + std::to_string(r.line) + ": warning: row '" + r.id + "': ";
+    const char* tail = " (the row is used: limits bound the controller, not the measurement)";
+    Vec6<double> lo, hi;
+    if (robot.is_stewart()) {
+      lo = robot.stewart().min_length;
+      hi = robot.stewart().max_length;
+    } else {
+      lo = robot.hybrid().min_joint;
+      hi = robot.hybrid().max_joint;
+    }
+    for (int i = 0; i < 6; ++i) {
+      const char* unit = robot.is_hybrid() && i >= 3 ? "rad" : "mm";
+      const std::string msg = outside("q" + std::to_string(i + 1), q(i), lo(i), hi(i), unit);
+      if (!msg.empty()) out.push_back(where + msg + tail);
+    }
+    if (robot.is_hybrid()) {
+      HybridPassive<double> passive = open.hybrid().home;
+      Vec6<double> q_ik;
+      if (hybrid_ik(open.hybrid(), Pose<double>::from_xyz_rpy(r.commanded), q_ik, nullptr, &passive) == Status::Ok) {
+        const std::string msg = outside("UP extension c", passive.extension, robot.hybrid().min_extension,
+                                        robot.hybrid().max_extension, "mm");
+        if (!msg.empty()) out.push_back(where + msg + tail);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace kincal::identify
