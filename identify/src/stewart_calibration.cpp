@@ -81,6 +81,12 @@ std::vector<Node> calibration_nodes(const Robot& nominal, const PoseTable& data)
 // platform (a rad and a mm are not commensurable otherwise).
 constexpr double kOrientationWeightMm = 200.0;
 
+// The damped step (calibrate_stewart): a trial machine whose weighted RSS is
+// more than this many times the last one's is a step too far; the step is
+// halved at most kMaxHalvings times (2^-30 of a step is below any error).
+constexpr double kDivergence = 4.0;
+constexpr int kMaxHalvings = 30;
+
 }  // namespace
 
 namespace {
@@ -126,25 +132,26 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   out.theta = Eigen::VectorXd::Zero(m);
   Eigen::MatrixXd H(n, m);
   Eigen::VectorXd y(n);
-  LinearProblem last_problem;
-  for (int it = 0;; ++it) {
-    // Steps 3–4 / 7–8: poses of the machine as currently believed, and the
-    // residual pose errors dQ = QM − QC.
-    const StewartGeometry<double> g = stewart_with_errors(open.stewart(), out.theta);
-    StewartIteration rec;
-    rec.iteration = it;
+  std::vector<Eigen::Matrix<double, 6, 1>> at(nodes.size());  // where E was evaluated (for a rank-deficiency hint)
+  // Steps 3–4 / 7–8: poses of the machine believed at θ, and the residual
+  // pose errors dQ = QM − QC with their design E. The FK of each node starts
+  // where the machine was measured. Returns the index of the first node whose
+  // FK fails (nodes.size() when none does).
+  std::string why;  // the status of a node whose FK failed
+  auto linearise = [&](const StewartGeometry<double>& g, StewartIteration& rec) {
     double sum_p2 = 0;
-    std::vector<Eigen::Matrix<double, 6, 1>> at;  // where E was evaluated (for a rank-deficiency hint)
+    rec.max_dq_int = 0;
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       Pose<double> predicted;
       const FkReport<double> r = stewart_fk(g, nodes[k].q, nodes[k].measured, predicted);
-      if (r.status != Status::Ok)
-        throw InputError(data.file, nodes[k].line, 0,
-                         "row '" + nodes[k].id + "': FK of the corrected machine failed (" + to_string(r.status) + ")");
+      if (r.status != Status::Ok) {
+        why = to_string(r.status);
+        return k;
+      }
       const Twist<double> dq = pose_error(nodes[k].measured, predicted);
       const Eigen::Index row = Eigen::Index(6 * k);
       H.middleRows<6>(row) = stewart_error_jacobian(g, predicted);
-      at.push_back(predicted.to_xyz_rpy());
+      at[k] = predicted.to_xyz_rpy();
       y.segment<6>(row) = dq;
       H.middleRows<3>(row + 3) *= kOrientationWeightMm;
       y.segment<3>(row + 3) *= kOrientationWeightMm;
@@ -152,7 +159,49 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
       sum_p2 += dq.head<3>().squaredNorm();
     }
     rec.rms_position_mm = std::sqrt(sum_p2 / double(nodes.size()));
-    if (it > 0) rec.step_norm = out.history.back().step_norm;
+    return nodes.size();
+  };
+  LinearProblem last_problem;
+  Eigen::VectorXd accepted = out.theta;  // θ of the last machine every node's FK reached
+  Eigen::VectorXd delta = Eigen::VectorXd::Zero(m);
+  double accepted_rss = 0;
+  for (int it = 0;; ++it) {
+    // Damped step (issue #11 item 2): θ = accepted + t·δ with t = 1 (seed
+    // 001's full correction) unless the machine at that θ leaves a node
+    // without an FK solution or the weighted residual grows more than
+    // kDivergence-fold — a step into a region the linearisation at the last
+    // machine does not describe, as from millimetre errors before a
+    // machine's first calibration. Then t is halved (backtracking along the
+    // Gauss–Newton direction) until the step is acceptable.
+    StewartIteration rec;
+    rec.iteration = it;
+    double t = 1;
+    StewartGeometry<double> g;
+    for (int halving = 0;; ++halving) {
+      out.theta = accepted + t * delta;
+      g = stewart_with_errors(open.stewart(), out.theta);
+      const std::size_t failed = linearise(g, rec);
+      const bool ok = failed == nodes.size();
+      if (ok && (it == 0 || !options.damped || y.squaredNorm() <= kDivergence * accepted_rss)) break;
+      if (it == 0 || !options.damped)  // the nominal machine itself: nothing to damp
+        throw InputError(data.file, nodes[failed].line, 0,
+                         "row '" + nodes[failed].id + "': FK of the " + (it == 0 ? "nominal" : "corrected") +
+                             " machine failed (" + why + ") from the measured pose; check the robot description "
+                             "and the row");
+      if (halving == kMaxHalvings)
+        throw InputError(data.file, ok ? 0 : nodes[failed].line, 0,
+                         std::string("the identification found no step from iteration ") + std::to_string(it) +
+                             " that keeps every node's FK converging" +
+                             (ok ? "" : " (row '" + nodes[failed].id + "': " + why + ")") +
+                             "; the machine is far from its description: check the robot file's geometry");
+      t *= 0.5;
+    }
+    accepted = out.theta;
+    accepted_rss = y.squaredNorm();
+    if (it > 0) {  // the step taken from the last iteration's machine
+      out.history.back().step_norm *= t;
+      out.history.back().step_fraction = t;
+    }
     // Step 5: the linear estimate (identify/estimators: SVD, rank judged on
     // the column-scaled design; never normal equations). Linearised at θ, the
     // measured pose error relative to the nominal machine is dQ + E·θ ≈ E·θ_true,
@@ -169,7 +218,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     const RankReport rank = rank_by_svd(H);
     if (rank.rank < m) throw_rank_deficient(data, at, g, H, names, rank.rank);
     out.fit = estimate(problem, options.estimator);
-    const Eigen::VectorXd delta = out.fit.x - out.theta;
+    delta = out.fit.x - out.theta;
     out.sigma_mm = std::sqrt(out.fit.sigma2_unbiased);
     out.rank = int(rank.rank);
     out.condition_number = rank.condition_number;
@@ -178,9 +227,12 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     last_problem = std::move(problem);
     rec.step_norm = delta.norm();
     out.history.push_back(rec);
-    // Step 6 / 10: correct and repeat until the correction is negligible.
-    out.theta = out.fit.x;
-    if (delta.norm() <= options.step_tolerance * (1 + out.theta.norm()) || it + 1 >= options.max_iterations) break;
+    // Step 6 / 10: correct and repeat until the correction is negligible
+    // (a negligible one is taken whole, as seed 001 does).
+    if (delta.norm() <= options.step_tolerance * (1 + out.fit.x.norm()) || it + 1 >= options.max_iterations) {
+      out.theta = out.fit.x;
+      break;
+    }
   }
   // Nodes inconsistent with the others (a mis-seated reflector, a mistyped
   // row): deleted-node F test at the solution, Bonferroni over the nodes.

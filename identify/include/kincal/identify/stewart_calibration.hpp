@@ -36,12 +36,17 @@ struct StewartIteration {
   int iteration = 0;
   double max_dq_int = 0;       // max over cal nodes of dQ1 + dQ2 (seed 001 Eqs. (15)–(17)), mm + rad
   double rms_position_mm = 0;  // RMS position residual over cal nodes
-  double step_norm = 0;        // |Δθ|, mm
+  double step_norm = 0;        // |Δθ| of the step taken from this iteration, mm
+  double step_fraction = 1;    // of the Gauss–Newton step: < 1 when it was damped (calibrate_stewart)
 };
 
 struct StewartCalibrationOptions {
-  int max_iterations = 20;
+  int max_iterations = 50;  // damped steps (far from the solution) may need more than seed 001's few
   double step_tolerance = 1e-9;  // stop when |Δθ| ≤ step_tolerance · (1 + |θ|)
+  // Damped steps (calibrate_stewart): a step that leaves a node's FK without
+  // a solution or multiplies the residual is halved. false: seed 001's full
+  // step every time (for comparison; it fails from millimetre errors).
+  bool damped = true;
   // The linear step (seed 001 step 5): ols (default), ridge (k by GCV unless
   // estimator.ridge says otherwise) or pcr (number of components by GCV unless
   // estimator.pcr says otherwise). Each iteration estimates the total error
