@@ -7,6 +7,7 @@
 //
 // "No malloc" is enforced as in core_no_malloc_test.cpp: EIGEN_RUNTIME_NO_MALLOC
 // with eigen_assert routed to abort().
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -204,6 +205,132 @@ TEST(coreCompensation, ValidateTableNamesEachFailure) {
   s.machine.calibrated.min_length[3] = 1e4;
   s.crc = table_crc(s);
   EXPECT_EQ(validate_table(s), CS::TableValues);
+}
+
+// Issue #10 item 2: a CRC-valid table with absurd numbers passed
+// validate_table (which trusts finite values) and the compensator then sent
+// legs of 908–2003 mm with status Ok. Against machine limits compiled in apart
+// from the table, each absurdity is refused (TableLimits).
+TEST(coreCompensation, ValidateTableAgainstMachineLimits) {
+  const StewartCalibrationTable<double> good_s = stewart_table();
+  const HybridCalibrationTable<double> good_h = hybrid_table();
+  const MachineLimits<double> ls = limits_from_bounds(nominal_table(make_stewart_seed001<double>()).bounds);
+  const MachineLimits<double> lh = limits_from_bounds(nominal_table(make_hybrid_seed000<double>()).bounds);
+  EXPECT_EQ(validate_table(good_s, ls), CS::Ok);
+  EXPECT_EQ(validate_table(good_h, lh), CS::Ok);
+  EXPECT_EQ(validate_table(with_effects(good_s), ls), CS::Ok);
+  EXPECT_EQ(validate_table(with_effects(good_h), lh), CS::Ok);
+
+  // The issue's table: stroke bounds 0…1e6 and source errors of 1e6. It
+  // passes the table's own check (the defect) and fails against the limits.
+  StewartCalibrationTable<double> absurd = good_s;
+  for (int i = 0; i < 6; ++i) {
+    absurd.bounds.min_joint[i] = absurd.machine.calibrated.min_length[i] = 0;
+    absurd.bounds.max_joint[i] = absurd.machine.calibrated.max_length[i] = 1e6;
+    absurd.bounds.max_correction[i] = 1e6;
+    absurd.machine.calibrated.base[3 * i] += 1e6;
+  }
+  absurd = seal_table(absurd);
+  EXPECT_EQ(validate_table(absurd), CS::Ok) << "the table's own check cannot see it";
+  EXPECT_EQ(validate_table(absurd, ls), CS::TableLimits);
+  // ... and a compensator given the limits refuses it, where one without
+  // them would compensate with it.
+  EXPECT_EQ(StewartCompensator<double>(absurd, ls).status(), CS::TableLimits);
+
+  // One absurdity at a time.
+  auto refused = [&](auto t, const MachineLimits<double>& l, const char* what) {
+    t = seal_table(t);
+    EXPECT_EQ(validate_table(t), CS::Ok) << what;
+    EXPECT_EQ(validate_table(t, l), CS::TableLimits) << what;
+  };
+  {
+    auto t = good_s;
+    t.bounds.max_joint[2] = ls.max_joint[2] + 1;  // a stroke past the drives'
+    refused(t, ls, "stroke past the limits");
+  }
+  {
+    auto t = good_s;
+    t.bounds.max_correction[4] = ls.max_correction[4] * 2;
+    refused(t, ls, "correction bound above the limits'");
+  }
+  {
+    auto t = good_s;  // a leg offset dl_i above the correction bound (was unchecked for the 6-UPS)
+    t.machine.calibrated.length_offset[1] = t.machine.nominal.length_offset[1] + 1.5 * t.bounds.max_correction[1];
+    refused(t, ls, "leg offset above the correction bound");
+  }
+  {
+    auto t = good_s;
+    t.machine.calibrated.platform[7] += 2 * ls.max_geometry_error;
+    refused(t, ls, "platform joint error above the cap");
+  }
+  {
+    auto t = good_h;
+    t.machine.source_errors[77] = 1e6;
+    refused(t, lh, "hybrid source error of 1e6");
+  }
+  {
+    auto t = with_effects(good_h);
+    t.effects.scale[0] = 0.5;
+    refused(t, lh, "scale 0.5");
+  }
+  {
+    auto t = with_effects(good_s);
+    t.effects.thermal = 0.1;
+    refused(t, ls, "thermal 0.1 /C");
+  }
+  {
+    auto t = with_effects(good_s);
+    t.effects.backlash[3] = 2 * t.bounds.max_correction[3];
+    refused(t, ls, "backlash above the correction bound");
+  }
+  // Limits that are not limits.
+  MachineLimits<double> nan_limits = ls;
+  nan_limits.max_joint[0] = std::nan("");
+  EXPECT_EQ(validate_table(good_s, nan_limits), CS::TableLimits);
+  MachineLimits<double> unordered = ls;
+  unordered.min_joint[5] = unordered.max_joint[5];
+  EXPECT_EQ(validate_table(good_s, unordered), CS::TableLimits);
+}
+
+// Issue #10 item 3: a rotation that is not one (×1.001) and approach
+// directions other than ±1 (0, −5, 1e30) were compensated; now InvalidInput.
+TEST(coreCompensation, SkewedRotationsAndBadDirectionsAreInvalidInput) {
+  const StewartCalibrationTable<double> t = with_effects(stewart_table());
+  const StewartCompensator<double> c(t);
+  Vec6<double> home;
+  ASSERT_EQ(c.home_command(home), CS::Ok);
+  auto state = c.start(home);
+  NcPoint<double> p;
+  p.pose = Pose<double>::from_xyz_rpy(5, -3, 205, 0.02, -0.01, 0.03);
+  Vec6<double> q;
+  ASSERT_EQ(c.compensate(state, p, q), CS::Ok);
+  NcPoint<double> skewed = p;
+  skewed.pose.R *= 1.001;
+  EXPECT_EQ(c.compensate(state, skewed, q), CS::InvalidInput);
+  EXPECT_EQ(q, state.command);
+  for (const double bad : {0.0, -5.0, 1e30, 0.999}) {
+    Vec6<double> dir = Vec6<double>::Ones();
+    dir(2) = bad;
+    NcPoint<double> d = p;
+    d.direction = &dir;
+    EXPECT_EQ(c.compensate(state, d, q), CS::InvalidInput) << bad;
+  }
+  Vec6<double> ok_dir;
+  ok_dir << 1, -1, 1, -1, 1, -1;
+  NcPoint<double> d = p;
+  d.direction = &ok_dir;
+  EXPECT_EQ(c.compensate(state, d, q), CS::Ok);
+  // float: its own rounding of a rotation built in float is accepted.
+  const auto tf = table_cast<float>(t);
+  const StewartCompensator<float> cf(tf);
+  Vec6<float> hf;
+  ASSERT_EQ(cf.home_command(hf), CS::Ok);
+  auto sf = cf.start(hf);
+  Vec6<float> qf;
+  EXPECT_EQ(cf.compensate(sf, Pose<float>::from_xyz_rpy(5.f, -3.f, 205.f, 0.02f, -0.01f, 0.03f), qf), CS::Ok);
+  Pose<float> skewed_f = Pose<float>::from_xyz_rpy(5.f, -3.f, 205.f, 0.02f, -0.01f, 0.03f);
+  skewed_f.R *= 1.001f;
+  EXPECT_EQ(cf.compensate(sf, skewed_f, qf), CS::InvalidInput);
 }
 
 template <class Machine> void check_corrupt_table_holds(CalibrationTable<Machine> t, const Pose<double>& pose) {
@@ -439,10 +566,16 @@ template <class S> void check_stewart_reliability() {
     expect_failure(cw, sw, point(P::from_xyz_rpy(S(0), S(0), S(200), S(0), S(0), S(yaw))), good, CS::Singular,
                    "singular");
   }
-  // Oversized: the calibrated geometry differs by up to ~0.1 mm; a 10 µm bound.
+  // Oversized: the calibrated joints differ by up to ~0.1 mm; a 10 µm bound.
+  // The leg offsets dl_i act at every point, so a table whose dl_i exceed the
+  // bound is refused outright (TableLimits, below); here they are zeroed and
+  // the joint positions' errors alone make the correction too large.
   {
     StewartCalibrationTable<S> tight = t;
-    for (int i = 0; i < 6; ++i) tight.bounds.max_correction[i] = S(0.01);
+    for (int i = 0; i < 6; ++i) {
+      tight.bounds.max_correction[i] = S(0.01);
+      tight.machine.calibrated.length_offset[i] = tight.machine.nominal.length_offset[i];
+    }
     tight = seal_table(tight);
     const StewartCompensator<S> ct(tight);
     auto s2 = ct.start(home);

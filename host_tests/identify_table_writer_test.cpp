@@ -163,6 +163,33 @@ TEST(identifyTableWriter, StewartHeader) {
   EXPECT_EQ(crc_of(h, "kCalibrationCrc_float"), table_crc(table_cast<float>(table)));
 }
 
+// Issue #10 item 2: `kincal table` built a CRC-valid table from a hand-edited
+// MODEL.json with absurd numbers and exited 0. The table is now checked
+// against the machine limits of the model's nominal robot, and the error
+// names the value.
+TEST(identifyTableWriter, AModelOutsideTheMachineLimitsIsRefusedNamingTheValue) {
+  ki::CalibrationModel model;
+  model.nominal = ki::load_robot("stewart-seed001");
+  model.estimator = "ols";
+  model.parameters.push_back({"dXB2", 1e6, 1e-4, true});
+  try {
+    (void)ki::calibration_table_header(model, "edited.json");
+    ADD_FAILURE() << "a source error of 1e6 mm made a table";
+  } catch (const ki::InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("outside the machine limits"), std::string::npos) << m;
+    EXPECT_NE(m.find("machine.calibrated.base - nominal[3] = 1e+06 above max_geometry_error 10"), std::string::npos) << m;
+  }
+  model.parameters = {{"dl3", 7.5, 1e-4, true}};  // a leg offset above the 5 mm bound
+  try {
+    (void)ki::calibration_table_header(model, "edited.json");
+    ADD_FAILURE() << "a 7.5 mm leg offset made a table";
+  } catch (const ki::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("leg offset dl3 = 7.5 above the correction bound 5"), std::string::npos)
+        << e.what();
+  }
+}
+
 // ---- the command line ---------------------------------------------------------
 
 struct ToolRun {

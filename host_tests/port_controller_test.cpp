@@ -117,10 +117,13 @@ template <class Machine, std::size_t In = 4, std::size_t Out = 4> struct Rig {
   ControllerConfig<double> config;
   const Table* calibration;
   const Table* nominal;
+  // The machine limits compiled in apart from the tables: here the nominal
+  // table's bounds (its stroke, the default correction bound).
+  MachineLimits<double> limits;
   std::vector<JointCommand<double>> out;
   std::vector<Cycle> cycles;
 
-  Rig(const Table& cal, const Table& nom) : calibration(&cal), nominal(&nom) {
+  Rig(const Table& cal, const Table& nom) : calibration(&cal), nominal(&nom), limits(limits_from_bounds(nom.bounds)) {
     if constexpr (Machine::family == MachineFamily::Hybrid) config.scaling = EncoderOffsetScaling<double>::hybrid_default();
   }
 
@@ -130,7 +133,7 @@ template <class Machine, std::size_t In = 4, std::size_t Out = 4> struct Rig {
   // command (every `consumer_every`-th period). Ends when the stream is
   // over and everything is out.
   Ctl& run(std::vector<NcInput<double>> points, int producer_every = 1, int per_period = 1, int consumer_every = 1) {
-    Ctl& ctl = ctl_storage.emplace(regs, stream, *calibration, *nominal, config);
+    Ctl& ctl = ctl_storage.emplace(regs, stream, *calibration, *nominal, limits, config);
     ctl.start();
     std::size_t next = 0;
     for (int period = 0; period < 100000; ++period) {
@@ -284,6 +287,11 @@ TEST(PortController, AUserEffectReturningNanIsHeldNotSent) {
   rig.config.user_effect = [](const double*, int, const Vec6<double>&, const kincal::EffectInputs<double>&) {
     return std::nan("");
   };
+  // The home pose cannot be compensated either (the user code fails there
+  // too), so only a configured initial command — where the machine stands,
+  // inside the limits — gives the controller something safe to hold.
+  rig.config.has_initial_command = true;
+  ASSERT_EQ(Compensator<StewartM>(stewart_nominal()).home_command(rig.config.initial_command), CS::Ok);
   auto& ctl = rig.run(in);
   expect_no_point_lost(rig.out, in);
   for (const auto& c : rig.out) {
@@ -475,6 +483,79 @@ TEST(PortController, BothTablesCorruptRefusesEveryPointAndHolds) {
   EXPECT_EQ(ctl.state().count(CS::TableVersion), 6u);
 }
 
+// ---- the held output (issue #10 item 1) ------------------------------------------
+// Before, with both tables rejected or a home pose that cannot be
+// compensated, every held point went out as q = 0 (outside both machines'
+// strokes), and a NaN initial command went out as NaN. Now a hold must be a
+// verified command inside the machine limits, or nothing is sent at all.
+
+template <class Machine> void expect_nothing_sent(Rig<Machine>& rig, const std::vector<NcInput<double>>& in) {
+  auto& ctl = rig.run(in);
+  EXPECT_FALSE(ctl.report().hold);
+  EXPECT_FALSE(ctl.report().ready());
+  EXPECT_TRUE(rig.out.empty()) << rig.out.size() << " commands sent, first " << rig.raw(rig.out[0]).transpose();
+  EXPECT_GT(ctl.counters().no_safe_hold, 0u);
+  EXPECT_EQ(ctl.step(), Cycle::NoSafeHold);
+}
+
+TEST(PortController, BothTablesRejectedAndNoInitialCommandSendsNothing) {
+  const HybridCalibrationTabled bad = corrupt_crc();
+  HybridCalibrationTabled bad_nominal = hybrid_nominal();
+  bad_nominal.version = 0;
+  Rig<HybridM> rig(bad, bad_nominal);
+  expect_nothing_sent(rig, hybrid_path(6));
+}
+
+TEST(PortController, AHomePoseThatCannotBeCompensatedSendsNothing) {
+  // A table whose lower joint limit lies above the home command: valid, inside
+  // the machine limits, but the home pose is out of its limits.
+  static const HybridCalibrationTabled high_floor = [] {
+    HybridCalibrationTabled t = hybrid_calibrated();
+    t.bounds.min_joint[0] = t.bounds.max_joint[0] - 1.0;
+    return seal_table(t);
+  }();
+  Rig<HybridM> rig(high_floor, hybrid_nominal());
+  expect_nothing_sent(rig, hybrid_path(6));
+}
+
+TEST(PortController, AnInitialCommandThatIsNotFiniteOrOutsideTheLimitsSendsNothing) {
+  for (const double bad : {std::nan(""), 0.0, 1e30}) {
+    Rig<StewartM> rig(stewart_calibrated(), stewart_nominal());
+    rig.config.has_initial_command = true;
+    ASSERT_EQ(Compensator<StewartM>(stewart_nominal()).home_command(rig.config.initial_command), CS::Ok);
+    rig.config.initial_command(3) = bad;
+    expect_nothing_sent(rig, stewart_path(5));
+  }
+}
+
+// The issue's absurd table (CRC valid, stroke bounds 0…1e6, source errors of
+// 1e6): refused against the machine limits, so the controller runs on the
+// nominal table and no leg goes outside the stroke.
+TEST(PortController, AnAbsurdTableIsRefusedAgainstTheMachineLimits) {
+  static const StewartCalibrationTabled absurd = [] {
+    StewartCalibrationTabled t = stewart_calibrated();
+    for (int i = 0; i < 6; ++i) {
+      t.bounds.min_joint[i] = t.machine.calibrated.min_length[i] = 0;
+      t.bounds.max_joint[i] = t.machine.calibrated.max_length[i] = 1e6;
+      t.bounds.max_correction[i] = 1e6;
+      t.machine.calibrated.length_offset[i] = 1e3;
+    }
+    return seal_table(t);
+  }();
+  ASSERT_EQ(validate_table(absurd), CS::Ok);
+  Rig<StewartM> rig(absurd, stewart_nominal());
+  const auto in = stewart_path(8);
+  auto& ctl = rig.run(in);
+  expect_no_point_lost(rig.out, in);
+  EXPECT_EQ(ctl.report().table, CS::TableLimits);
+  EXPECT_TRUE(ctl.report().nominal);
+  EXPECT_TRUE(ctl.report().ready());
+  for (const auto& c : rig.out) {
+    EXPECT_TRUE(c.flags & kCommandNominalModel);
+    EXPECT_TRUE(command_inside(rig.raw(c), rig.limits)) << rig.raw(c).transpose();
+  }
+}
+
 // ---- encoder-offset registers --------------------------------------------------
 
 TEST(PortController, ARetriedRegisterWriteIsCountedAndThenFine) {
@@ -618,7 +699,28 @@ TEST(PortController, SequenceGapsAreCountedAndFlagged) {
   for (std::size_t k = 0; k < rig.out.size(); ++k)
     EXPECT_EQ((rig.out[k].flags & kCommandSequenceGap) != 0, k == 3 || k == 6 || k == 7) << k;
   // A gap is the producer's loss, not a bad point: each is still compensated.
-  EXPECT_EQ(ctl.counters().compensated, 8u);
+  // The repeated 8 is not executed (it would move the machine back along the
+  // path): held, with its port status.
+  EXPECT_EQ(ctl.counters().compensated, 7u);
+  EXPECT_EQ(ctl.counters().held, 1u);
+  EXPECT_TRUE(rig.out[6].flags & kCommandHeld);
+  EXPECT_EQ(rig.out[6].port, PortStatus::SequenceError);
+  EXPECT_EQ(rig.raw(rig.out[6]), rig.raw(rig.out[5]));
+}
+
+// A jump to 0xFFFFFFFF does not wrap the missing-point counter (issue #10 item 3).
+TEST(PortController, MissingPointsSaturateInsteadOfWrapping) {
+  Rig<HybridM> rig(hybrid_calibrated(), hybrid_nominal());
+  auto in = hybrid_path(5);
+  in[1].sequence = 0x80000000u;  // 1, then two jumps of ~2^31: 0xFFFFFFFC missing so far
+  in[2].sequence = 0xFFFFFFFFu;
+  in[3].sequence = 0u;           // the producer's counter wraps: no gap
+  in[4].sequence = 0xFFFFFFFFu;  // another 0xFFFFFFFE missing: the sum does not fit
+  auto& ctl = rig.run(in);
+  expect_no_point_lost(rig.out, in);
+  EXPECT_EQ(ctl.counters().missing_points, 0xFFFFFFFFu) << "saturated (it wrapped to 0xFFFFFFFA before)";
+  EXPECT_EQ(ctl.counters().sequence_errors, 3u);
+  EXPECT_EQ(ctl.counters().compensated, 5u);
 }
 
 // Everything at once, for the event counters' bookkeeping: points answered =

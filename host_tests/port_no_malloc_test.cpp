@@ -64,7 +64,9 @@ template <class Machine> void run_without_heap(const CalibrationTable<Machine>& 
   int n_out = 0;
   {
     HeapForbidden guard;
-    Controller<Machine, emulator::EncoderRegisters, emulator::NcStream<Scalar, 4, 4>> ctl(regs, stream, table, nominal, config);
+    const MachineLimits<Scalar> limits = limits_from_bounds(nominal.bounds);
+    Controller<Machine, emulator::EncoderRegisters, emulator::NcStream<Scalar, 4, 4>> ctl(regs, stream, table, nominal,
+                                                                                           limits, config);
     ctl.start();
     int next = 0;
     for (int period = 0; period < 10 * kPoints && n_out < kPoints; ++period) {

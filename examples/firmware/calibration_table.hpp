@@ -11,6 +11,7 @@
 #include <cstdint>
 
 #include "kincal/core/calibration_table.hpp"
+#include "kincal/core/machine_limits.hpp"
 
 static_assert(::kincal::kCalibrationTableVersion == 2,
               "generated for calibration table format version 2; regenerate with this kincal");
@@ -23,6 +24,21 @@ inline constexpr const char* kGenerator = "kincal 0.1.0";
 inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::Hybrid;
 inline constexpr std::uint32_t kFormatVersion = 2;
 template <class Scalar> using Machine = ::kincal::HybridMachine<Scalar>;
+
+// The machine limits (core/machine_limits.hpp), from the nominal robot description,
+// never from identified values: the controller checks the tables against them. A port
+// may replace them with limits of its own (its drives' travel).
+inline constexpr ::kincal::MachineLimits<double> kLimits_double = {
+    {628.0, 628.0, 628.0, -2.8999999999999999, -1.3999999999999999, -1.3999999999999999},  // min_joint
+    {1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999},  // max_joint
+    {5.0, 5.0, 5.0, 0.02, 0.02, 0.02},  // max_correction
+    10.0, 0.01, 0.001};  // max_geometry_error, max_scale, max_thermal
+
+inline constexpr ::kincal::MachineLimits<float> kLimits_float = {
+    {628.0, 628.0, 628.0, -2.9000000953674316, -1.3999999761581421, -1.3999999761581421},  // min_joint
+    {1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421},  // max_joint
+    {5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164},  // max_correction
+    10.0, 0.0099999997764825821, 0.0010000000474974513};  // max_geometry_error, max_scale, max_thermal
 
 inline constexpr double kCalibrationValues_double[289] = {
     // machine.nominal.base_joints
@@ -246,8 +262,8 @@ inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kCa
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kCalibrationValues_double, kCalibrationCrc_double);
 static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_double,
               "Calibration table (double): CRC mismatch, the values were edited or corrupted; regenerate with kincal table");
-static_assert(::kincal::validate_table(kCalibrationTable_double) == ::kincal::CompensationStatus::Ok,
-              "Calibration table (double): fails validate_table (values, bounds)");
+static_assert(::kincal::validate_table(kCalibrationTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
+              "Calibration table (double): fails validate_table (values, bounds, machine limits)");
 
 inline constexpr double kNominalValues_double[289] = {
     // machine.nominal.base_joints
@@ -471,8 +487,8 @@ inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kNo
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kNominalValues_double, kNominalCrc_double);
 static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
               "Nominal table (double): CRC mismatch, the values were edited or corrupted; regenerate with kincal table");
-static_assert(::kincal::validate_table(kNominalTable_double) == ::kincal::CompensationStatus::Ok,
-              "Nominal table (double): fails validate_table (values, bounds)");
+static_assert(::kincal::validate_table(kNominalTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
+              "Nominal table (double): fails validate_table (values, bounds, machine limits)");
 
 inline constexpr double kCalibrationValues_float[289] = {
     // machine.nominal.base_joints
@@ -696,8 +712,8 @@ inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kCal
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kCalibrationValues_float, kCalibrationCrc_float);
 static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_float,
               "Calibration table (float): CRC mismatch, the values were edited or corrupted; regenerate with kincal table");
-static_assert(::kincal::validate_table(kCalibrationTable_float) == ::kincal::CompensationStatus::Ok,
-              "Calibration table (float): fails validate_table (values, bounds)");
+static_assert(::kincal::validate_table(kCalibrationTable_float, kLimits_float) == ::kincal::CompensationStatus::Ok,
+              "Calibration table (float): fails validate_table (values, bounds, machine limits)");
 
 inline constexpr double kNominalValues_float[289] = {
     // machine.nominal.base_joints
@@ -921,18 +937,20 @@ inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kNom
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kNominalValues_float, kNominalCrc_float);
 static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,
               "Nominal table (float): CRC mismatch, the values were edited or corrupted; regenerate with kincal table");
-static_assert(::kincal::validate_table(kNominalTable_float) == ::kincal::CompensationStatus::Ok,
-              "Nominal table (float): fails validate_table (values, bounds)");
+static_assert(::kincal::validate_table(kNominalTable_float, kLimits_float) == ::kincal::CompensationStatus::Ok,
+              "Nominal table (float): fails validate_table (values, bounds, machine limits)");
 
 // By scalar: calibration_table<double>() etc.
 template <class Scalar> struct Tables;
 template <> struct Tables<double> {
   static constexpr const ::kincal::CalibrationTable<Machine<double>>& calibration() { return kCalibrationTable_double; }
   static constexpr const ::kincal::CalibrationTable<Machine<double>>& nominal() { return kNominalTable_double; }
+  static constexpr const ::kincal::MachineLimits<double>& limits() { return kLimits_double; }
 };
 template <> struct Tables<float> {
   static constexpr const ::kincal::CalibrationTable<Machine<float>>& calibration() { return kCalibrationTable_float; }
   static constexpr const ::kincal::CalibrationTable<Machine<float>>& nominal() { return kNominalTable_float; }
+  static constexpr const ::kincal::MachineLimits<float>& limits() { return kLimits_float; }
 };
 
 }  // namespace kincal::generated

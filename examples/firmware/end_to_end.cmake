@@ -17,6 +17,12 @@ endif()
 if(NOT DEFINED MAX_RMS_UM)
   set(MAX_RMS_UM 3)
 endif()
+if(NOT HELD_OUT)
+  set(HELD_OUT L2-)  # the held-out rows' id prefix
+endif()
+if(NOT MIN_RMS_UM)
+  set(MIN_RMS_UM 100)  # the uncompensated error the test must start from
+endif()
 get_filename_component(_here ${CMAKE_CURRENT_LIST_FILE} DIRECTORY)
 
 function(run)
@@ -46,7 +52,7 @@ run(${TOOL} simulate --robot ${ROBOT} --poses ${POSES} --errors ${ERRORS} ${_eff
     --out ${DIR}/reached_uncompensated.csv)
 run(${TOOL} simulate --robot ${ROBOT} --poses ${_fw_joints} --errors ${ERRORS} ${_effect}
     --out ${DIR}/reached_firmware.csv)
-run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_uncompensated.csv --prefix L2- --label "held-out layer, uncompensated"
-    --min-rms-um 100)
-run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_firmware.csv --prefix L2- --label "held-out layer, firmware commands"
+run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_uncompensated.csv --prefix ${HELD_OUT} --label "held-out rows, uncompensated"
+    --min-rms-um ${MIN_RMS_UM})
+run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_firmware.csv --prefix ${HELD_OUT} --label "held-out rows, firmware commands"
     --max-rms-um ${MAX_RMS_UM})

@@ -1,11 +1,14 @@
 #include "kincal/identify/calibration_table.hpp"
 
+#include <cmath>
+#include <sstream>
 #include <string>
 
 #include "kincal/core/compensation.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
 
@@ -18,13 +21,93 @@ void finish(CalibrationTable<Machine>& t, const CalibrationModel& model, const C
     for (int i = 0; i < 6; ++i) t.bounds.max_correction[i] = (*options.max_correction)(i);
   }
   t = seal_table(t);
-  const CompensationStatus st = validate_table(t);
+  const MachineLimits<double> limits = machine_limits(model.nominal, options);
+  const CompensationStatus st = validate_table(t, limits);
+  if (st == CompensationStatus::TableLimits)
+    throw InputError("the calibration table is outside the machine limits: " +
+                     limit_violation(AnyCalibrationTable(t), limits));
   if (st != CompensationStatus::Ok)
     throw InputError(std::string("the calibration table fails its check (") + to_string(st) +
                      "): a correction above its bound or a value out of range");
 }
 
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+// The first value of `values` (named `name`) whose magnitude is above `cap`.
+template <std::size_t N>
+std::string above(const char* name, const double (&values)[N], double cap, const char* cap_name, const double* base = nullptr) {
+  for (std::size_t k = 0; k < N; ++k) {
+    const double v = values[k] - (base != nullptr ? base[k] : 0.0);
+    if (!(std::abs(v) <= cap))
+      return std::string(name) + "[" + std::to_string(k) + "] = " + number(v) + " above " + cap_name + " " + number(cap);
+  }
+  return {};
+}
+
 }  // namespace
+
+MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options) {
+  const TableBounds<double> b = robot.is_hybrid() ? default_bounds(robot.hybrid()) : default_bounds(robot.stewart());
+  MachineLimits<double> l = limits_from_bounds(b);
+  if (options.max_correction)
+    for (int i = 0; i < 6; ++i) l.max_correction[i] = (*options.max_correction)(i);
+  return l;
+}
+
+std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<double>& l) {
+  return std::visit(
+      [&](const auto& t) -> std::string {
+        if (validate_table(t, l) != CompensationStatus::TableLimits) return {};
+        for (int i = 0; i < 6; ++i) {
+          const std::string j = "[" + std::to_string(i) + "] ";
+          if (!(t.bounds.min_joint[i] >= l.min_joint[i]))
+            return "bounds.min_joint" + j + number(t.bounds.min_joint[i]) + " below the limit " + number(l.min_joint[i]);
+          if (!(t.bounds.max_joint[i] <= l.max_joint[i]))
+            return "bounds.max_joint" + j + number(t.bounds.max_joint[i]) + " above the limit " + number(l.max_joint[i]);
+          if (!(t.bounds.max_correction[i] <= l.max_correction[i]))
+            return "bounds.max_correction" + j + number(t.bounds.max_correction[i]) + " above the limit " +
+                   number(l.max_correction[i]);
+        }
+        std::string why;
+        const auto& e = t.effects;
+        const double* cap = t.bounds.max_correction;
+        for (int i = 0; i < 6 && why.empty(); ++i) {
+          const std::string j = "[" + std::to_string(i) + "] = ";
+          if (!(std::abs(e.scale[i]) <= l.max_scale)) why = "effects.scale" + j + number(e.scale[i]) + " above max_scale " + number(l.max_scale);
+          else if (!(std::abs(e.backlash[i]) <= cap[i])) why = "effects.backlash" + j + number(e.backlash[i]) + " above the correction bound " + number(cap[i]);
+          else if (!(std::abs(e.compliance[i]) <= cap[i])) why = "effects.compliance" + j + number(e.compliance[i]) + " above the correction bound " + number(cap[i]);
+          else if (!(std::abs(e.cyclic_sin[i]) <= cap[i])) why = "effects.cyclic_sin" + j + number(e.cyclic_sin[i]) + " above the correction bound " + number(cap[i]);
+          else if (!(std::abs(e.cyclic_cos[i]) <= cap[i])) why = "effects.cyclic_cos" + j + number(e.cyclic_cos[i]) + " above the correction bound " + number(cap[i]);
+        }
+        if (!why.empty()) return why;
+        if (!(std::abs(e.thermal) <= l.max_thermal))
+          return "effects.thermal = " + number(e.thermal) + " above max_thermal " + number(l.max_thermal);
+        using M = typename std::decay_t<decltype(t)>::MachineType;
+        if constexpr (M::family == MachineFamily::Hybrid) {
+          return above("machine.source_errors", t.machine.source_errors, l.max_geometry_error, "max_geometry_error");
+        } else {
+          const auto& m = t.machine;
+          why = above("machine.calibrated.base - nominal", m.calibrated.base, l.max_geometry_error, "max_geometry_error",
+                      m.nominal.base);
+          if (why.empty())
+            why = above("machine.calibrated.platform - nominal", m.calibrated.platform, l.max_geometry_error,
+                        "max_geometry_error", m.nominal.platform);
+          for (int i = 0; i < 6 && why.empty(); ++i) {
+            const double dl = m.calibrated.length_offset[i] - m.nominal.length_offset[i];
+            if (!(std::abs(dl) <= cap[i]))
+              why = "leg offset dl" + std::to_string(i + 1) + " = " + number(dl) + " above the correction bound " +
+                    number(cap[i]);
+          }
+          return why;
+        }
+      },
+      any);
+}
 
 StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
                                                           const CalibrationTableOptions& options) {

@@ -11,6 +11,7 @@
 
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/compensation.hpp"
+#include "kincal/core/machine_limits.hpp"
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -91,7 +92,26 @@ std::string hex32(std::uint32_t v) {
   return buf;
 }
 
+// The MachineFamily enumerator and core's machine type of a family (they
+// differ: MachineFamily::Stewart6Ups, StewartMachine<S>).
 std::string family_name(MachineFamily f) { return f == MachineFamily::Hybrid ? "Hybrid" : "Stewart6Ups"; }
+std::string machine_type(MachineFamily f) { return f == MachineFamily::Hybrid ? "HybridMachine" : "StewartMachine"; }
+
+// The machine limits (core/machine_limits.hpp) as a constexpr aggregate.
+template <class Scalar>
+void emit_limits(std::ostream& out, const MachineLimits<Scalar>& l, const std::string& scalar) {
+  auto row = [&](const Scalar(&v)[6]) {
+    std::string r = "{";
+    for (int i = 0; i < 6; ++i) r += number(double(v[i])) + (i < 5 ? ", " : "}");
+    return r;
+  };
+  out << "inline constexpr ::kincal::MachineLimits<" << scalar << "> kLimits_" << scalar << " = {\n"
+      << "    " << row(l.min_joint) << ",  // min_joint\n"
+      << "    " << row(l.max_joint) << ",  // max_joint\n"
+      << "    " << row(l.max_correction) << ",  // max_correction\n"
+      << "    " << number(double(l.max_geometry_error)) << ", " << number(double(l.max_scale)) << ", "
+      << number(double(l.max_thermal)) << "};  // max_geometry_error, max_scale, max_thermal\n\n";
+}
 
 // One table as a value array, a CRC constant and the constexpr table.
 template <class Machine>
@@ -115,16 +135,16 @@ void emit_table(std::ostream& out, const CalibrationTable<Machine>& t, const std
   }
   out << "};\n";
   out << "inline constexpr std::uint32_t k" << name << "Crc_" << scalar << " = " << hex32(t.crc) << ";\n";
-  out << "inline constexpr ::kincal::CalibrationTable<::kincal::" << family_name(Machine::family) << "Machine<"
+  out << "inline constexpr ::kincal::CalibrationTable<::kincal::" << machine_type(Machine::family) << "<"
       << scalar << ">> k" << name << "Table_" << scalar << " =\n    ::kincal::table_from_values<::kincal::"
-      << family_name(Machine::family) << "Machine<" << scalar << ">>(k" << name << "Values_" << scalar << ", k" << name
+      << machine_type(Machine::family) << "<" << scalar << ">>(k" << name << "Values_" << scalar << ", k" << name
       << "Crc_" << scalar << ");\n";
   out << "static_assert(::kincal::table_crc(k" << name << "Table_" << scalar << ") == k" << name << "Crc_" << scalar
       << ",\n              \"" << name << " table (" << scalar
       << "): CRC mismatch, the values were edited or corrupted; regenerate with kincal table\");\n";
-  out << "static_assert(::kincal::validate_table(k" << name << "Table_" << scalar
+  out << "static_assert(::kincal::validate_table(k" << name << "Table_" << scalar << ", kLimits_" << scalar
       << ") == ::kincal::CompensationStatus::Ok,\n              \"" << name << " table (" << scalar
-      << "): fails validate_table (values, bounds)\");\n\n";
+      << "): fails validate_table (values, bounds, machine limits)\");\n\n";
 }
 
 // The nominal machine's table: the geometry without identified errors, the
@@ -172,7 +192,20 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
   const CalibrationTable<Machine> nominal = nominal_of(table);
   const CalibrationTable<MachineF> table_f = table_cast<float>(table);
   const CalibrationTable<MachineF> nominal_f = table_cast<float>(nominal);
-  for (const CompensationStatus st : {validate_table(nominal), validate_table(table_f), validate_table(nominal_f)})
+  // The machine limits from the nominal robot description (never from the
+  // identified values): the firmware checks both tables against them.
+  const MachineLimits<double> limits = machine_limits(model.nominal);
+  MachineLimits<float> limits_f{};
+  for (int i = 0; i < 6; ++i) {
+    limits_f.min_joint[i] = float(limits.min_joint[i]);
+    limits_f.max_joint[i] = float(limits.max_joint[i]);
+    limits_f.max_correction[i] = float(limits.max_correction[i]);
+  }
+  limits_f.max_geometry_error = float(limits.max_geometry_error);
+  limits_f.max_scale = float(limits.max_scale);
+  limits_f.max_thermal = float(limits.max_thermal);
+  for (const CompensationStatus st : {validate_table(table, limits), validate_table(nominal, limits),
+                                      validate_table(table_f, limits_f), validate_table(nominal_f, limits_f)})
     if (st != CompensationStatus::Ok)
       throw InputError(model_name, 0, 0,
                        std::string("the generated table fails its check (") + to_string(st) + ")");
@@ -196,7 +229,8 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "// when the calibration table fails its start-up check (docs/firmware.md).\n"
       << "#pragma once\n\n"
       << "#include <cstdint>\n\n"
-      << "#include \"kincal/core/calibration_table.hpp\"\n\n"
+      << "#include \"kincal/core/calibration_table.hpp\"\n"
+      << "#include \"kincal/core/machine_limits.hpp\"\n\n"
       << "static_assert(::kincal::kCalibrationTableVersion == " << kCalibrationTableVersion
       << ",\n              \"generated for calibration table format version " << kCalibrationTableVersion
       << "; regenerate with this kincal\");\n\n"
@@ -206,7 +240,12 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "inline constexpr const char* kGenerator = " << literal(std::string("kincal ") + kVersion) << ";\n"
       << "inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::" << fam << ";\n"
       << "inline constexpr std::uint32_t kFormatVersion = " << kCalibrationTableVersion << ";\n"
-      << "template <class Scalar> using Machine = ::kincal::" << fam << "Machine<Scalar>;\n\n";
+      << "template <class Scalar> using Machine = ::kincal::" << machine_type(Machine::family) << "<Scalar>;\n\n"
+      << "// The machine limits (core/machine_limits.hpp), from the nominal robot description,\n"
+      << "// never from identified values: the controller checks the tables against them. A port\n"
+      << "// may replace them with limits of its own (its drives' travel).\n";
+  emit_limits(out, limits, "double");
+  emit_limits(out, limits_f, "float");
   emit_table(out, table, "Calibration", "double", names);
   emit_table(out, nominal, "Nominal", "double", names);
   emit_table(out, table_f, "Calibration", "float", names);
@@ -216,10 +255,12 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "template <> struct Tables<double> {\n"
       << "  static constexpr const ::kincal::CalibrationTable<Machine<double>>& calibration() { return kCalibrationTable_double; }\n"
       << "  static constexpr const ::kincal::CalibrationTable<Machine<double>>& nominal() { return kNominalTable_double; }\n"
+      << "  static constexpr const ::kincal::MachineLimits<double>& limits() { return kLimits_double; }\n"
       << "};\n"
       << "template <> struct Tables<float> {\n"
       << "  static constexpr const ::kincal::CalibrationTable<Machine<float>>& calibration() { return kCalibrationTable_float; }\n"
       << "  static constexpr const ::kincal::CalibrationTable<Machine<float>>& nominal() { return kNominalTable_float; }\n"
+      << "  static constexpr const ::kincal::MachineLimits<float>& limits() { return kLimits_float; }\n"
       << "};\n\n"
       << "}  // namespace kincal::generated\n";
   return out.str();

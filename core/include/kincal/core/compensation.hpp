@@ -8,7 +8,9 @@
 // each joint's approach direction, event counters per status).
 //
 // Per NC point (docs/compensation.md):
-//   1. the nominal pose (and temperature, if given) must be finite;
+//   1. the nominal pose (and temperature, if given) must be finite, its
+//      rotation orthonormal (a skewed matrix is a corrupt NC point, not a
+//      pose), explicit approach directions exactly ±1;
 //   2. the nominal configuration of that pose: its nominal IK command q_nom
 //      (the reference of the correction bound), the singularity test (6-UPS:
 //      the IK Jacobian; hybrid: hybrid_wrenches, det J_f = det(W_c·J_S)/det J_P)
@@ -27,7 +29,10 @@
 //      kept while the joint stands still (or the NC point's explicit
 //      directions);
 //   6. checks: |q − q_nom| ≤ bounds.max_correction (else OversizedCorrection),
-//      bounds.min_joint ≤ q ≤ bounds.max_joint (else OutOfLimits).
+//      bounds.min_joint ≤ q ≤ bounds.max_joint (else OutOfLimits). With
+//      machine limits (machine_limits.hpp, compiled in apart from the table)
+//      the table was refused unless those bounds lie inside them, so no
+//      command outside the drives' range can leave.
 // On Ok the command is written and remembered. On any failure the command
 // output is the last safe command (held), the state's counter of that status
 // is incremented, and nothing else changes; no NaN ever leaves.
@@ -40,6 +45,7 @@
 #include "kincal/core/effects.hpp"
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/hybrid_error_twist.hpp"
+#include "kincal/core/machine_limits.hpp"
 #include "kincal/core/stewart.hpp"
 
 #if defined(__GNUC__)
@@ -97,6 +103,25 @@ template <> struct StillTolerance<double> {
 template <> struct StillTolerance<float> {
   static constexpr float value = 1e-6f;
 };
+
+// |RᵀR − I| allowed in an NC pose: rounding of a rotation built in the
+// scalar (a matrix ×1.001 is not a rotation and is refused).
+template <class Scalar> struct RotationTolerance;
+template <> struct RotationTolerance<double> {
+  static constexpr double value = 1e-9;
+};
+template <> struct RotationTolerance<float> {
+  static constexpr float value = 1e-5f;
+};
+
+template <class Scalar> bool orthonormal(const Mat3<Scalar>& R) {
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) {
+      const Scalar d = R.col(a).dot(R.col(b)) - (a == b ? Scalar(1) : Scalar(0));
+      if (!((d < Scalar(0) ? -d : d) <= RotationTolerance<Scalar>::value)) return false;
+    }
+  return true;
+}
 
 // exp([ω]×) (Rodrigues, as exp_so3 of core/pose.hpp) for the small rotation
 // of a predicted pose error, without libm: sin θ/θ and (1 − cos θ)/θ² by their
@@ -166,8 +191,17 @@ template <class Machine> class Compensator {
   // and holds its output: the caller falls back to a nominal table. A
   // temporary table is refused at compile time (deleted overload below): it
   // would dangle.
+  //
+  // `limits` are the machine's limits known apart from the table
+  // (machine_limits.hpp): the table is refused (TableLimits) unless its
+  // bounds, corrections and effect values lie inside them. Without them, the
+  // table's own bounds serve (host tools that built the table from a robot
+  // file they trust).
   explicit Compensator(const Table&& table) = delete;
-  explicit Compensator(const Table& table) : table_(&table), status_(validate_table(table)) {
+  Compensator(const Table&& table, const MachineLimits<Scalar>& limits) = delete;
+  explicit Compensator(const Table& table) : Compensator(table, limits_from_bounds(table.bounds)) {}
+  Compensator(const Table& table, const MachineLimits<Scalar>& limits)
+      : table_(&table), status_(validate_table(table, limits)) {
     if (status_ != CompensationStatus::Ok) return;
     model_.load(table.machine);
     effects_ = to_core(table.effects);
@@ -270,7 +304,8 @@ template <class Machine> class Compensator {
                               Vec6<Scalar>& ideal_out, Vec6<Scalar>& direction_out) const {
     using CS = CompensationStatus;
     if (status_ != CS::Ok) return status_;
-    if (!point.pose.finite() || (point.has_temperature && !is_finite(point.temperature)))
+    if (!point.pose.finite() || (point.has_temperature && !is_finite(point.temperature)) ||
+        !orthonormal(point.pose.R))
       return CS::InvalidInput;
     const Scalar temperature = point.has_temperature ? point.temperature : effects_.reference_temperature;
     EffectInputs<Scalar> inputs;
@@ -284,7 +319,10 @@ template <class Machine> class Compensator {
     Vec6<Scalar> dir = state.direction;
     if (point.direction != nullptr) {
       dir = *point.direction;
-      if (!all_finite(dir)) return CS::InvalidInput;
+      // An approach direction is −1 or +1; anything else (0, −5, 1e30) is a
+      // corrupt input, not a direction to scale the backlash by.
+      for (int i = 0; i < 6; ++i)
+        if (!(dir(i) == Scalar(1) || dir(i) == Scalar(-1))) return CS::InvalidInput;
     } else {
       for (int i = 0; i < 6; ++i) {
         const Scalar d = ideal(i) - state.reference(i);

@@ -25,10 +25,11 @@ enum class CompensationStatus : std::uint8_t {
   TableFamily,          // parameter table of another machine family
   TableCrc,             // parameter table CRC mismatch: corrupt table
   TableValues,          // non-finite value, or bounds / geometry out of range
+  TableLimits,          // table outside the limits compiled in apart from it (machine_limits.hpp)
 };
 
 // Number of codes (size of the per-status event counters).
-inline constexpr int kCompensationStatusCount = 11;
+inline constexpr int kCompensationStatusCount = 12;
 
 constexpr CompensationStatus to_compensation_status(Status s) { return static_cast<CompensationStatus>(s); }
 
@@ -38,13 +39,14 @@ static_assert(static_cast<int>(CompensationStatus::NotConverged) == static_cast<
                   static_cast<int>(CompensationStatus::Unreachable) == static_cast<int>(Status::Unreachable) &&
                   static_cast<int>(CompensationStatus::InvalidInput) == static_cast<int>(Status::InvalidInput),
               "CompensationStatus must extend Status value for value");
-static_assert(static_cast<int>(CompensationStatus::TableValues) + 1 == kCompensationStatusCount,
+static_assert(static_cast<int>(CompensationStatus::TableLimits) + 1 == kCompensationStatusCount,
               "kCompensationStatusCount out of date");
 
 // True for the codes that say the parameter table itself is unusable.
 constexpr bool is_table_failure(CompensationStatus s) {
   return s == CompensationStatus::TableVersion || s == CompensationStatus::TableFamily ||
-         s == CompensationStatus::TableCrc || s == CompensationStatus::TableValues;
+         s == CompensationStatus::TableCrc || s == CompensationStatus::TableValues ||
+         s == CompensationStatus::TableLimits;
 }
 
 constexpr const char* to_string(CompensationStatus s) {
@@ -60,6 +62,7 @@ constexpr const char* to_string(CompensationStatus s) {
     case CompensationStatus::TableFamily: return "table family";
     case CompensationStatus::TableCrc: return "table crc";
     case CompensationStatus::TableValues: return "table values";
+    case CompensationStatus::TableLimits: return "table outside machine limits";
   }
   return "unknown";
 }

@@ -16,6 +16,7 @@
 #include <variant>
 
 #include "kincal/core/calibration_table.hpp"
+#include "kincal/core/machine_limits.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/identify/model.hpp"
 
@@ -29,7 +30,19 @@ struct CalibrationTableOptions {
 
 using AnyCalibrationTable = std::variant<StewartCalibrationTable<double>, HybridCalibrationTable<double>>;
 
-// Sealed (CRC set) tables that pass validate_table. Throw InputError for a
+// The machine limits of a robot description (core/machine_limits.hpp): its
+// stroke / joint limits as the drives' range, the correction bound (options
+// or core's default_bounds) and the default caps. From the NOMINAL robot only,
+// never from identified values: what the firmware checks a table against.
+MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options = {});
+
+// Why a table is outside the limits, naming the first offending value
+// ("machine.source_errors[37] = 1e+06 above max_geometry_error 10"), or "" if
+// validate_table(table, limits) is Ok or fails for another reason.
+std::string limit_violation(const AnyCalibrationTable& table, const MachineLimits<double>& limits);
+
+// Sealed (CRC set) tables that pass validate_table against machine_limits of
+// the model's robot. Throw InputError for a
 // model of the other family, a model the compensation cannot use (unknown
 // parameter, non-finite value), or a table that fails validate_table (naming
 // the status, e.g. an encoder offset above its correction bound).

@@ -7,8 +7,9 @@
 //     Stream     an NcStreamPort backend (nc_stream.hpp)
 //
 // Start-up (constructor + start()):
-//   1. the calibration table is checked (validate_table: version, family, CRC,
-//      values and bounds). If it fails, the controller falls back to the
+//   1. the calibration table is checked (validate_table against the machine
+//      limits compiled in apart from it, core/machine_limits.hpp: version,
+//      family, CRC, values, bounds and limits). If it fails, the controller falls back to the
 //      nominal table (the machine's nominal model, generated next to it) and
 //      says so: StartReport::table holds the failure, every command carries
 //      kCommandNominalModel. If the nominal table fails too, the compensator
@@ -21,6 +22,15 @@
 //      refuses motion: every point is answered with the held output and the
 //      register failure as its port status (counted once per channel at
 //      start-up, and per point as a held command).
+//   3. the held output — what every refused point is answered with until a
+//      point is accepted — is verified: the configured initial command (where
+//      the machine stands at power-up) or else the compensated command at the
+//      home pose, finite and inside the machine limits. Without such a
+//      command there is nothing safe to hold (both tables rejected, the home
+//      pose not compensable, a NaN initial command): the controller is not
+//      ready (StartReport::hold), and step() sends nothing at all
+//      (Cycle::NoSafeHold, counted) — never a zero or NaN command, which
+//      would drive a joint outside its stroke.
 //
 // Per interpolation period, step():
 //   - a command the drives refused last period (output overrun) is sent
@@ -28,8 +38,11 @@
 //     instead of loss;
 //   - otherwise one NC point is taken: none available is an underrun (the
 //     drives hold their last command); its sequence number is checked against
-//     the previous one (a gap or a step back is counted and flagged: points
-//     lost before the port), producer overruns reported with it are counted;
+//     the previous one: a gap is counted and flagged (points lost before the
+//     port; missing_points saturates rather than wraps), a step back or a
+//     duplicate is answered with the held output (PortStatus::SequenceError:
+//     a producer that repeats or reorders points must not move the machine
+//     back along the path); producer overruns reported with it are counted;
 //   - the point is compensated (core/compensation.hpp: status per failure,
 //     held output, events counted in the compensator state) and its command
 //     sent with the point's sequence number, status and flags. Every point
@@ -85,6 +98,7 @@ struct ControllerCounters {
   std::uint32_t register_failures = 0;  // channels whose offset could not be verified
   std::uint32_t register_retries = 0;   // failed attempts that a later attempt repaired
   std::uint32_t table_failures = 0;     // tables rejected at start-up
+  std::uint32_t no_safe_hold = 0;       // periods refused: no verified command to hold, nothing sent
 };
 
 struct StartReport {
@@ -94,8 +108,10 @@ struct StartReport {
   PortStatus registers = PortStatus::Ok;                 // Ok or the first register failure
   int register_channel = -1;                             // the channel that failed
   std::int32_t counts[kEncoderChannels] = {};            // what the registers hold (read back)
+  bool hold = false;  // a verified held output exists (finite, inside the machine limits)
   bool ready() const {
-    return registers == PortStatus::Ok && (table == CompensationStatus::Ok || fallback == CompensationStatus::Ok);
+    return hold && registers == PortStatus::Ok &&
+           (table == CompensationStatus::Ok || fallback == CompensationStatus::Ok);
   }
 };
 
@@ -106,6 +122,7 @@ enum class Cycle : std::uint8_t {
   OutputBlocked,  // the drives refused the command: it is kept for the next period
   End,            // the NC program has ended and every command is out
   Error,          // the stream failed
+  NoSafeHold,     // no verified command to hold (StartReport::hold): nothing taken, nothing sent
 };
 
 template <class Machine, class Registers, class Stream> class Controller {
@@ -113,20 +130,26 @@ template <class Machine, class Registers, class Stream> class Controller {
   using Scalar = typename Machine::Scalar;
   using Table = CalibrationTable<Machine>;
 
+  // `limits`: the machine limits compiled in apart from the tables
+  // (core/machine_limits.hpp); like the tables, read in place, so they must
+  // outlive the controller (a temporary is refused at compile time).
   Controller(Registers& registers, Stream& stream, const Table& calibration, const Table& nominal,
-             const ControllerConfig<Scalar>& config = ControllerConfig<Scalar>())
+             const MachineLimits<Scalar>& limits, const ControllerConfig<Scalar>& config = ControllerConfig<Scalar>())
       : registers_(registers),
         stream_(stream),
+        limits_(&limits),
         scaling_(config.scaling),
         register_attempts_(config.register_attempts),
-        report_(check_tables(calibration, nominal)),
-        compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal) {
+        report_(check_tables(calibration, nominal, limits)),
+        compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal, limits) {
     counters_.table_failures =
         (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
     initial_ = config.initial_command;
     has_initial_ = config.has_initial_command;
     compensator_.set_user_effect(config.user_effect);
   }
+  Controller(Registers&, Stream&, const Table&, const Table&, const MachineLimits<Scalar>&&,
+             const ControllerConfig<Scalar>& = ControllerConfig<Scalar>()) = delete;
 
   // Writes and verifies the encoder offsets (see the file comment) and sets
   // the held output to the machine's initial command.
@@ -140,6 +163,10 @@ template <class Machine, class Registers, class Stream> class Controller {
   // One interpolation period (see the file comment).
   Cycle step() {
     if (!started_) start();
+    if (!report_.hold) {
+      ++counters_.no_safe_hold;
+      return Cycle::NoSafeHold;
+    }
     if (has_pending_) {
       const PortStatus s = stream_.send(pending_);
       if (s == PortStatus::Overrun) {
@@ -184,7 +211,7 @@ template <class Machine, class Registers, class Stream> class Controller {
     Cycle c = Cycle::Command;
     for (std::uint32_t k = 0; k < max_periods; ++k) {
       c = step();
-      if (c == Cycle::End || c == Cycle::Error) break;
+      if (c == Cycle::End || c == Cycle::Error || c == Cycle::NoSafeHold) break;
     }
     return c;
   }
@@ -211,12 +238,12 @@ template <class Machine, class Registers, class Stream> class Controller {
   }
 
  private:
-  static StartReport check_tables(const Table& calibration, const Table& nominal) {
+  static StartReport check_tables(const Table& calibration, const Table& nominal, const MachineLimits<Scalar>& limits) {
     StartReport r;
-    r.table = validate_table(calibration);
+    r.table = validate_table(calibration, limits);
     if (r.table != CompensationStatus::Ok) {
       r.nominal = true;
-      r.fallback = validate_table(nominal);
+      r.fallback = validate_table(nominal, limits);
     }
     return r;
   }
@@ -229,14 +256,23 @@ template <class Machine, class Registers, class Stream> class Controller {
     cmd.port = PortStatus::Ok;
     cmd.flags = 0;
     ++counters_.points;
-    // Sequence numbers: each point should follow the previous one.
+    // Sequence numbers: each point should follow the previous one. A gap
+    // (points lost before the port) is flagged and the point executed; a
+    // duplicate or a step back is held (see the file comment).
+    bool replayed = false;
     if (have_last_sequence_ && in.sequence != last_sequence_ + 1u) {
       ++counters_.sequence_errors;
-      if (in.sequence > last_sequence_) counters_.missing_points += in.sequence - last_sequence_ - 1u;
       cmd.flags |= kCommandSequenceGap;
+      if (in.sequence > last_sequence_) {
+        const std::uint32_t missing = in.sequence - last_sequence_ - 1u;
+        const std::uint32_t room = 0xFFFFFFFFu - counters_.missing_points;
+        counters_.missing_points += missing < room ? missing : room;  // saturates
+      } else {
+        replayed = true;
+      }
     }
     have_last_sequence_ = true;
-    last_sequence_ = in.sequence;
+    if (!replayed) last_sequence_ = in.sequence;
     if (in.producer_overruns > 0) {
       counters_.producer_overruns += in.producer_overruns;
       cmd.flags |= kCommandAfterInputOverrun;
@@ -244,9 +280,10 @@ template <class Machine, class Registers, class Stream> class Controller {
     if (report_.nominal) cmd.flags |= kCommandNominalModel;
 
     Vec6<Scalar>& q = cmd.q;
-    if (report_.registers != PortStatus::Ok) {
-      // No verified encoder zero: no motion (see the file comment).
-      cmd.port = report_.registers;
+    if (report_.registers != PortStatus::Ok || replayed) {
+      // No verified encoder zero, or a point that does not move forward
+      // along the program: no motion (see the file comment).
+      cmd.port = replayed ? PortStatus::SequenceError : report_.registers;
       q = state_.command;
       cmd.flags |= kCommandHeld;
     } else {
@@ -280,11 +317,16 @@ template <class Machine, class Registers, class Stream> class Controller {
   KINCAL_PORT_NOINLINE void reset_state() {
     Vec6<Scalar>& q = pending_.q;  // scratch until the first point
     q = initial_;
+    bool have = has_initial_;
     if (!has_initial_) {
       new (&state_) CompensatorState<Scalar>();
       home_point();
-      if (compensator_.compensate(state_, point_, q) != CompensationStatus::Ok) q = initial_;
+      have = compensator_.compensate(state_, point_, q) == CompensationStatus::Ok;
     }
+    // Only a verified command may be held (see the file comment): finite and
+    // inside the machine limits. Otherwise the state keeps a command that is
+    // never sent (step() refuses every period).
+    report_.hold = have && command_inside(q, *limits_);
     restart(q);
   }
   KINCAL_PORT_NOINLINE void home_point() {
@@ -332,6 +374,7 @@ template <class Machine, class Registers, class Stream> class Controller {
 
   Registers& registers_;
   Stream& stream_;
+  const MachineLimits<Scalar>* limits_;
   EncoderOffsetScaling<Scalar> scaling_;
   int register_attempts_;
   StartReport report_;

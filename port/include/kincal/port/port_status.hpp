@@ -29,6 +29,7 @@ enum class PortStatus : std::uint8_t {
   EndOfStream,       // the NC program has ended
   Malformed,         // an NC record could not be parsed (the point is still delivered, flagged)
   IoError,           // the stream's medium failed (file, bus)
+  SequenceError,     // a duplicate point or a step back in the sequence: held, not executed
 };
 
 constexpr const char* to_string(PortStatus s) {
@@ -44,6 +45,7 @@ constexpr const char* to_string(PortStatus s) {
     case PortStatus::EndOfStream: return "end of stream";
     case PortStatus::Malformed: return "malformed record";
     case PortStatus::IoError: return "stream i/o error";
+    case PortStatus::SequenceError: return "sequence step back or duplicate";
   }
   return "unknown";
 }
