@@ -35,7 +35,10 @@ std::string test_name() { return ::testing::UnitTest::GetInstance()->current_tes
 ToolRun run_tool(const std::string& args) {
   fs::create_directories(kDir);
   const std::string out = kDir + "/" + test_name() + ".stdout", err = kDir + "/" + test_name() + ".stderr";
-  const std::string cmd = std::string("\"") + KINCAL_TOOL + "\" " + args + " >\"" + out + "\" 2>\"" + err + "\"";
+  // Bounded: a tool that hangs (a FIFO, /dev/zero) fails the test with exit
+  // status 124 instead of stalling the suite.
+  const std::string cmd =
+      std::string("timeout 300 \"") + KINCAL_TOOL + "\" " + args + " >\"" + out + "\" 2>\"" + err + "\"";
   const int status = std::system(cmd.c_str());
   ToolRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -555,4 +558,102 @@ TEST(appKincal, EffectsListsEveryEffectWithItsParametersAndInputs) {
   const ToolRun bad = run_tool("effects --robot no-such-robot");
   EXPECT_NE(bad.code, 0);
   EXPECT_EQ(lines(bad.err), 1u) << bad.err;
+}
+
+// ---- files (issue #10 items 5–7) ------------------------------------------------
+
+namespace {
+
+std::string bytes_of(const std::string& path) { return ki::read_text_file(path); }
+
+// A small 6-UPS measurement set and its model, made once per test.
+struct MeasuredSet {
+  std::string data, model;
+};
+MeasuredSet measured_set(const std::string& tag) {
+  MeasuredSet s;
+  s.data = kDir + "/" + tag + "_measured.csv";
+  s.model = kDir + "/" + tag + "_model.json";
+  const ToolRun sim = run_tool("simulate --robot stewart-seed001 --poses \"" + kExamples + "/seed001/grid_poses.csv\" --errors \"" +
+                               kExamples + "/seed001/errors.csv\" --noise-mm 0.001 --out \"" + s.data + "\"");
+  EXPECT_EQ(sim.code, 0) << sim.err;
+  const ToolRun id = run_tool("identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + s.model + "\"");
+  EXPECT_EQ(id.code, 0) << id.err;
+  return s;
+}
+
+}  // namespace
+
+// Before: each of these overwrote its input and exited 0.
+TEST(appKincal, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
+  const MeasuredSet s = measured_set("same");
+  const std::string data = bytes_of(s.data), model = bytes_of(s.model);
+  fs::create_directories(kDir + "/sub");
+  const std::string link = kDir + "/link_to_data.csv";
+  fs::remove(link);
+  fs::create_symlink(s.data, link);
+  const std::string dotted = kDir + "/sub/../" + fs::path(s.data).filename().string();
+  const std::string poses = kExamples + "/seed001/grid_poses.csv";
+  for (const std::string& args :
+       {"identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + s.data + "\"",
+        "identify --robot stewart-seed001 --data \"" + s.data + "\" --out x.json --json \"" + dotted + "\"",
+        "identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + link + "\"",
+        "identify --robot stewart-seed001 --data \"" + s.data + "\" --effects thermal --out \"" + s.data + "\"",
+        "compensate --robot stewart-seed001 --model \"" + s.model + "\" --poses \"" + poses + "\" --out \"" + s.model + "\"",
+        "table --model \"" + s.model + "\" --out \"" + s.model + "\"",
+        "diagnose --robot stewart-seed001 --data \"" + s.data + "\" --json d.json --report \"" + s.data + "\"",
+        "diagnose --robot stewart-seed001 --data \"" + s.data + "\" --json \"" + link + "\"",
+        "simulate --robot stewart-seed001 --poses \"" + s.data + "\" --out \"" + s.data + "\""}) {
+    const ToolRun r = run_tool(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_TRUE(contains(r.err, "is also an input of this command")) << r.err;
+  }
+  EXPECT_EQ(bytes_of(s.data), data);
+  EXPECT_EQ(bytes_of(s.model), model);
+}
+
+// Before: `identify --json /dev/full` exited 0 with SUMMARY.json missing, and
+// a failed write destroyed the previous MODEL.json.
+TEST(appKincal, AFailedWriteLeavesEveryOldFileIntact) {
+  const MeasuredSet s = measured_set("full");
+  const std::string old_model = bytes_of(s.model);
+  const std::string summary = kDir + "/full_summary.json";
+  write("full_summary.json", "{\"previous\": true}\n");
+  ToolRun r = run_tool("identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + s.model +
+                       "\" --json /dev/full");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_TRUE(contains(r.err, "/dev/full: write failed")) << r.err;
+  EXPECT_EQ(bytes_of(s.model), old_model) << "MODEL.json replaced although SUMMARY.json failed";
+  // An unwritable directory for the second output: the first is not replaced either.
+  r = run_tool("identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + s.model +
+               "\" --json /nonexistent-dir/summary.json");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(bytes_of(s.model), old_model);
+  // diagnose: DIAG.json kept when the report cannot be written.
+  r = run_tool("diagnose --robot stewart-seed001 --data \"" + s.data + "\" --json \"" + summary +
+               "\" --report /dev/full --quiet");
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_EQ(bytes_of(summary), "{\"previous\": true}\n");
+  // No temporary left behind.
+  for (const auto& e : fs::directory_iterator(kDir))
+    EXPECT_EQ(e.path().filename().string().find(".kincal-"), std::string::npos) << e.path();
+  // And a good run replaces both.
+  r = run_tool("identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + s.model + "\" --json \"" +
+               summary + "\"");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(bytes_of(summary), "\"rank\""));
+}
+
+// Inputs are regular files: before, `robot --robot /dev/zero` read without
+// end and a directory read as "empty file".
+TEST(appKincal, InputsAreRegularFiles) {
+  for (const std::string& args : {std::string("robot --robot /dev/zero"), std::string("errors --data /dev/zero"),
+                                   "errors --data \"" + kDir + "\"", "robot --robot \"" + kDir + "\""}) {
+    const ToolRun r = run_tool(args);
+    EXPECT_EQ(r.code, 1) << args;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_TRUE(contains(r.err, "not a regular file") || contains(r.err, "is a directory")) << r.err;
+  }
 }

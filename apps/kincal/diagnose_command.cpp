@@ -9,6 +9,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/files.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -34,13 +35,6 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
 
 namespace {
 
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw ki::InputError(path, 0, 0, "cannot open for writing");
-  out << text;
-  if (!out) throw ki::InputError(path, 0, 0, "write failed");
-}
-
 std::string um(double v) {
   std::ostringstream s;
   s.precision(3);
@@ -51,6 +45,13 @@ std::string um(double v) {
 }  // namespace
 
 int run_diagnose(const DiagnoseArgs& a) {
+  // DIAG.json and REPORT.html are replaced together or not at all, and never
+  // over an input (files.hpp).
+  std::vector<std::string> inputs{a.data};
+  if (!ki::is_builtin_robot(a.robot)) inputs.push_back(a.robot);
+  std::vector<std::string> outs{a.json};
+  if (!a.report.empty()) outs.push_back(a.report);
+  ki::check_outputs(outs, inputs);
   const ki::Robot robot = ki::load_robot(a.robot);
   ki::PoseTableOptions popt;
   popt.joint_count = ki::Robot::joint_count();
@@ -74,8 +75,10 @@ int run_diagnose(const DiagnoseArgs& a) {
   }
 
   const ki::Diagnosis d = ki::diagnose(robot, data, opt);
-  write_text(a.json, ki::diagnosis_to_json(d));
-  if (!a.report.empty()) write_text(a.report, ki::diagnosis_report_html(d));
+  ki::OutputFiles outputs(inputs);
+  outputs.add(a.json, ki::diagnosis_to_json(d));
+  if (!a.report.empty()) outputs.add(a.report, ki::diagnosis_report_html(d));
+  outputs.commit();
 
   std::cout << "diagnose: " << a.data << ", robot " << robot.name << " (" << d.base_model << ")\n";
   std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << "); base model RMS cal " << um(d.rms.cal)

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "kincal/identify/files.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
@@ -56,7 +57,10 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
     }
     std::cout << "\n";
   }
-  ki::write_model_file(model, out);
+  // MODEL.json and SUMMARY.json together or not at all (files.hpp); run_identify
+  // has refused outputs that are inputs before any work.
+  ki::OutputFiles outputs({data_path});
+  outputs.add(out, ki::model_to_json(model));
   if (!json_path.empty()) {
     nlohmann::ordered_json j;
     j["robot"] = robot.name;
@@ -71,10 +75,9 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
     j["held_at_zero"] = held;
     j["residual_rms_um"] = {{"cal", report.rms_cal_um_final}, {"test", report.rms_test_um_final}};
     j["outliers"] = nlohmann::ordered_json::array();
-    std::ofstream f(json_path);
-    if (!f) throw ki::InputError(json_path, 0, 0, "cannot open for writing");
-    f << j.dump(2) << "\n";
+    outputs.add(json_path, j.dump(2) + "\n");
   }
+  outputs.commit();
   return 0;
 }
 

@@ -24,6 +24,7 @@
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
+#include "kincal/identify/files.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -53,7 +54,16 @@ struct SimulateArgs {
   std::uint64_t seed = 1;
 };
 
+// The files a command reads: an output must be none of them (files.hpp).
+std::vector<std::string> robot_input(const std::string& robot) {
+  return ki::is_builtin_robot(robot) ? std::vector<std::string>{} : std::vector<std::string>{robot};
+}
+
 int run_simulate(const SimulateArgs& a) {
+  std::vector<std::string> inputs = robot_input(a.robot);
+  inputs.push_back(a.poses);
+  inputs.push_back(a.errors);
+  ki::check_outputs({a.out}, inputs);
   const ki::Robot nominal = ki::load_robot(a.robot);
   ki::ParameterSet errors;
   if (!a.errors.empty()) errors = ki::read_parameters(a.errors, nominal, warn);
@@ -79,7 +89,7 @@ int run_simulate(const SimulateArgs& a) {
   if (report.simulated == 0)
     throw ki::InputError(a.poses, 0, 0,
                          "no row could be simulated (" + std::to_string(report.failed) + " rows failed); nothing written");
-  ki::write_pose_table_file(out, a.out);
+  ki::write_pose_table_file(out, a.out, inputs);
   return 0;
 }
 
@@ -94,11 +104,7 @@ int run_robot(const std::string& name, const std::string& out, bool list_params)
     std::cout << ki::robot_summary(robot);
     return 0;
   }
-  std::ofstream f(out, std::ios::binary);
-  if (!f) throw ki::InputError(out, 0, 0, "cannot open for writing");
-  f << ki::robot_to_json(robot);
-  f.flush();
-  if (!f) throw ki::InputError(out, 0, 0, "write error");
+  ki::write_output_file(out, ki::robot_to_json(robot), robot_input(name));
   return 0;
 }
 
@@ -194,8 +200,7 @@ nlohmann::json stats_json(const ki::PoseErrorStats& s) {
 
 // SUMMARY.json: the identification's own fields plus the residuals before and
 // after calibration, overall and per role / layer.
-void write_summary(nlohmann::json j, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after,
-                   const std::string& path) {
+std::string summary_text(nlohmann::json j, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after) {
   auto groups = [](const ki::PoseErrorReport& r) {
     nlohmann::json out;
     out["all"] = stats_json(r.all);
@@ -204,9 +209,15 @@ void write_summary(nlohmann::json j, const ki::PoseErrorReport& before, const ki
   };
   j["residual_before"] = groups(before);
   j["residual"] = groups(after);
-  std::ofstream f(path);
-  if (!f) throw ki::InputError(path, 0, 0, "cannot open for writing");
-  f << j.dump(2) << "\n";
+  return j.dump(2) + "\n";
+}
+
+// identify's outputs: MODEL.json and, if asked, SUMMARY.json, replaced
+// together or not at all (files.hpp).
+std::vector<std::string> identify_inputs(const IdentifyArgs& a) {
+  std::vector<std::string> in = robot_input(a.robot);
+  in.push_back(a.data);
+  return in;
 }
 
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
@@ -273,8 +284,8 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
   ki::print_pose_error_report(after, std::cout, false);
   const ki::CalibrationModel model = ki::hybrid_model(robot, used, std::nullopt, a.data);
-  ki::write_model_file(model, a.out);
-  std::cout << "\nmodel written to " << a.out << "\n";
+  ki::OutputFiles outputs(identify_inputs(a));
+  outputs.add(a.out, ki::model_to_json(model));
   if (!a.json.empty()) {
     nlohmann::json j;
     j["robot"] = robot.name;
@@ -297,12 +308,17 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["outliers_systematic"] = search.systematic;
     j["node_tests"] = node_tests_json(c.node_tests);
     j["outlier_p_threshold"] = c.outlier_p_threshold;
-    write_summary(j, before, after, a.json);
+    outputs.add(a.json, summary_text(j, before, after));
   }
+  outputs.commit();
+  std::cout << "\nmodel written to " << a.out << "\n";
   return 0;
 }
 
 int run_identify(const IdentifyArgs& a) {
+  std::vector<std::string> outs{a.out};
+  if (!a.json.empty()) outs.push_back(a.json);
+  ki::check_outputs(outs, identify_inputs(a));
   const ki::Robot robot = ki::load_robot(a.robot);
   if (!a.effects.empty()) {
     // --ridge-k with --effects: "gcv" (default) or a number (hkb needs the
@@ -360,14 +376,14 @@ int run_identify(const IdentifyArgs& a) {
   for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
   const ki::StewartCalibration& used = a.exclude_outliers && !search.removed.empty() ? search.rest : c;
   const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
-  ki::write_model_file(model, a.out);
+  ki::OutputFiles outputs(identify_inputs(a));
+  outputs.add(a.out, ki::model_to_json(model));
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
   const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
   std::cout << "\nresiduals before calibration (measured - nominal model):\n";
   ki::print_pose_error_report(before, std::cout, false);
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
   ki::print_pose_error_report(after, std::cout, false);
-  std::cout << "\nmodel written to " << a.out << "\n";
   if (!a.json.empty()) {
     nlohmann::json j;
     j["robot"] = robot.name;
@@ -384,13 +400,19 @@ int run_identify(const IdentifyArgs& a) {
     j["outliers_excluded"] = a.exclude_outliers && !outlier_ids.empty();
     j["node_tests"] = node_tests_json(c.node_tests);
     j["outlier_p_threshold"] = c.outlier_p_threshold;
-    write_summary(j, before, after, a.json);
+    outputs.add(a.json, summary_text(j, before, after));
   }
+  outputs.commit();
+  std::cout << "\nmodel written to " << a.out << "\n";
   return 0;
 }
 
 int run_compensate(const std::string& robot_name, const std::string& model_path, const std::string& poses_path,
                    const std::string& out_path) {
+  std::vector<std::string> inputs = robot_input(robot_name);
+  inputs.push_back(model_path);
+  inputs.push_back(poses_path);
+  ki::check_outputs({out_path}, inputs);
   const ki::Robot robot = ki::load_robot(robot_name);
   const ki::CalibrationModel model = ki::read_model_file(model_path);
   if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot))
@@ -469,7 +491,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
       table);
   out.has_status = failed > 0;
   if (failed == poses.rows.size()) throw ki::InputError(poses_path, 0, 0, "no pose could be compensated");
-  ki::write_pose_table_file(out, out_path);
+  ki::write_pose_table_file(out, out_path, inputs);
   return 0;
 }
 

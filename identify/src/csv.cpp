@@ -1,5 +1,8 @@
 #include "kincal/identify/csv.hpp"
 
+#include "kincal/identify/files.hpp"
+#include <sstream>
+
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -385,12 +388,14 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
   }
 }
 
-void write_pose_table_file(const PoseTable& table, const std::string& path) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw InputError(path, 0, 0, "cannot open for writing");
+std::string pose_table_text(const PoseTable& table) {
+  std::ostringstream out;
   write_pose_table(table, out);
-  out.flush();
-  if (!out) throw InputError(path, 0, 0, "write error");
+  return out.str();
+}
+
+void write_pose_table_file(const PoseTable& table, const std::string& path, const std::vector<std::string>& inputs) {
+  write_output_file(path, pose_table_text(table), inputs);
 }
 
 }  // namespace kincal::identify

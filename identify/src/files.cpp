@@ -100,15 +100,25 @@ OutputFiles::OutputFiles(std::vector<std::string> inputs) {
     if (!in.empty()) inputs_.push_back(std::move(in));
 }
 
+void check_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    const std::string& path = outputs[k];
+    if (path.empty()) throw InputError("an output path is empty");
+    for (const std::string& in : inputs)
+      if (!in.empty() && same_file(path, in))
+        throw InputError(path, 0, 0,
+                         "is also an input of this command (" + in + "); writing it would destroy the input: choose "
+                         "another output path");
+    for (std::size_t j = 0; j < k; ++j)
+      if (same_file(path, outputs[j])) throw InputError(path, 0, 0, "is given as two outputs of this command");
+  }
+}
+
 void OutputFiles::add(const std::string& path, std::string text) {
-  if (path.empty()) throw InputError("an output path is empty");
-  for (const std::string& in : inputs_)
-    if (same_file(path, in))
-      throw InputError(path, 0, 0,
-                       "is also an input of this command (" + in + "); writing it would destroy the input: choose "
-                       "another output path");
-  for (const Output& o : outputs_)
-    if (same_file(path, o.path)) throw InputError(path, 0, 0, "is given as two outputs of this command");
+  std::vector<std::string> paths;
+  for (const Output& o : outputs_) paths.push_back(o.path);
+  paths.push_back(path);
+  check_outputs(paths, inputs_);
   outputs_.push_back({path, std::move(text)});
 }
 

@@ -1,5 +1,7 @@
 #include "kincal/identify/input_error.hpp"
 
+#include "kincal/identify/files.hpp"
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -44,13 +46,6 @@ TextPosition position_of(std::string_view text, std::size_t offset) {
   return pos;
 }
 
-std::string read_text_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, 0, std::string("cannot open file: ") + std::strerror(errno));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw InputError(path, 0, 0, "read error");
-  return ss.str();
-}
+std::string read_text_file(const std::string& path) { return read_input_file(path); }
 
 }  // namespace kincal::identify

@@ -1,5 +1,7 @@
 #include "kincal/identify/model.hpp"
 
+#include "kincal/identify/files.hpp"
+
 #include <cmath>
 #include <algorithm>
 #include <fstream>
@@ -68,12 +70,8 @@ std::string model_to_json(const CalibrationModel& model) {
   return j.dump(2) + "\n";
 }
 
-void write_model_file(const CalibrationModel& model, const std::string& path) {
-  std::ofstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, 0, "cannot open for writing");
-  f << model_to_json(model);
-  f.flush();
-  if (!f) throw InputError(path, 0, 0, "write error");
+void write_model_file(const CalibrationModel& model, const std::string& path, const std::vector<std::string>& inputs) {
+  write_output_file(path, model_to_json(model), inputs);
 }
 
 static CalibrationModel parse_model_json(const json& j, const std::string& file);

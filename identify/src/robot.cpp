@@ -1,5 +1,7 @@
 #include "kincal/identify/robot.hpp"
 
+#include <sys/stat.h>
+
 #include <fstream>
 
 #include <algorithm>
@@ -92,8 +94,8 @@ Robot builtin_robot(const std::string& name) {
 Robot load_robot(const std::string& name_or_path) {
   if (is_builtin_robot(name_or_path)) return builtin_robot(name_or_path);
   if (name_or_path.empty()) throw InputError("empty robot name");
-  std::ifstream probe(name_or_path);
-  if (!probe)
+  struct stat st {};
+  if (::stat(name_or_path.c_str(), &st) != 0)
     throw InputError(name_or_path, 0, 0,
                      "neither a built-in robot (stewart-seed001, hybrid-seed000) nor a readable robot description file");
   return parse_robot(read_text_file(name_or_path), name_or_path);

@@ -13,6 +13,7 @@
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/files.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/version.hpp"
@@ -274,20 +275,11 @@ std::string calibration_table_header(const CalibrationModel& model, const std::s
 }
 
 void write_calibration_table_header(const std::string& model_path, const std::string& out_path) {
-  const std::string text = calibration_table_header(read_model_file(model_path), model_path);
-  {
-    std::ifstream old(out_path, std::ios::binary);
-    if (old) {
-      std::ostringstream current;
-      current << old.rdbuf();
-      if (current.str() == text) return;  // unchanged: keep the time stamp, nothing rebuilds
-    }
-  }
-  std::ofstream f(out_path, std::ios::binary);
-  if (!f) throw InputError(out_path, 0, 0, "cannot open for writing");
-  f << text;
-  f.flush();
-  if (!f) throw InputError(out_path, 0, 0, "write error");
+  // The output is never read (it may be /dev/stdout or a FIFO): a build that
+  // must not rebuild for an unchanged header writes to a scratch file and
+  // copies it with `cmake -E copy_if_different` (examples/firmware/CMakeLists.txt).
+  check_outputs({out_path}, {model_path});
+  write_output_file(out_path, calibration_table_header(read_model_file(model_path), model_path), {model_path});
 }
 
 }  // namespace kincal::identify

@@ -90,6 +90,8 @@ PoseTable read_pose_table(const std::string& path, const PoseTableOptions& optio
 // t1x..t3z, q1..qN, temp, time, dir1..dirN, status (each group if present).
 // Rows with a failure status get empty measured / target fields.
 void write_pose_table(const PoseTable& table, std::ostream& out);
-void write_pose_table_file(const PoseTable& table, const std::string& path);
+std::string pose_table_text(const PoseTable& table);
+// Written atomically (files.hpp); refused if `path` is one of `inputs`.
+void write_pose_table_file(const PoseTable& table, const std::string& path, const std::vector<std::string>& inputs = {});
 
 }  // namespace kincal::identify

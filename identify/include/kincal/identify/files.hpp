@@ -56,6 +56,10 @@ class OutputFiles {
   std::vector<Output> outputs_;
 };
 
+// Refuses (InputError) an output list with an empty path, a path that is one
+// of the inputs, or a path given twice — before a command does any work.
+void check_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
+
 // One output: OutputFiles(inputs).add(path, text) and commit().
 void write_output_file(const std::string& path, const std::string& text, const std::vector<std::string>& inputs = {});
 

@@ -41,7 +41,8 @@ struct TextPosition {
 // map to the position just after the last character.
 TextPosition position_of(std::string_view text, std::size_t offset);
 
-// Reads a whole file; throws InputError naming the file if it cannot be read.
+// Reads a whole input file (files.hpp read_input_file: a regular file of at
+// most 256 MiB); throws InputError naming the file if it cannot be read.
 std::string read_text_file(const std::string& path);
 
 }  // namespace kincal::identify

@@ -36,7 +36,8 @@ struct CalibrationModel {
 Robot calibrated_robot(const CalibrationModel& model);
 
 std::string model_to_json(const CalibrationModel& model);
-void write_model_file(const CalibrationModel& model, const std::string& path);
+// Written atomically (files.hpp); refused if `path` is one of `inputs`.
+void write_model_file(const CalibrationModel& model, const std::string& path, const std::vector<std::string>& inputs = {});
 // Throws InputError with file:line:column on malformed JSON, a missing key,
 // an unknown parameter name for the robot, or a non-finite value.
 CalibrationModel parse_model(const std::string& text, const std::string& file);

@@ -28,9 +28,9 @@ namespace kincal::identify {
 // (identify/calibration_table.hpp).
 std::string calibration_table_header(const CalibrationModel& model, const std::string& model_name);
 
-// Reads MODEL.json and writes the header to `out_path` (only if the text
-// changed, so a build that depends on the header does not rebuild for
-// nothing). Throws InputError on a bad model or an unwritable path.
+// Reads MODEL.json and writes the header to `out_path` atomically
+// (files.hpp; the output is never read). Throws InputError on a bad model, an
+// unwritable path, or an output that is the model file itself.
 void write_calibration_table_header(const std::string& model_path, const std::string& out_path);
 
 }  // namespace kincal::identify
