@@ -657,3 +657,36 @@ TEST(appKincal, InputsAreRegularFiles) {
     EXPECT_TRUE(contains(r.err, "not a regular file") || contains(r.err, "is a directory")) << r.err;
   }
 }
+
+// Issue #10 item 10: option values read wrongly — 0x10 meant 16 mm, '' meant
+// 0, nan disabled the elimination, an effect named twice held every one of its
+// parameters at 0. Each is now a one-line usage error (exit 2) or input error.
+TEST(appKincal, OptionValuesAreStrict) {
+  const std::string poses = "--poses \"" + kExamples + "/seed001/grid_poses.csv\" --out \"" + kDir + "/opt.csv\"";
+  for (const std::string& args : std::vector<std::string>{
+           "simulate --robot stewart-seed001 " + poses + " --noise-mm 0x10",
+        "simulate --robot stewart-seed001 " + poses + " --noise-mm ''",
+        "simulate --robot stewart-seed001 " + poses + " --noise-rad inf",
+        "simulate --robot stewart-seed001 " + poses + " --noise-mm -1",
+        "identify --robot stewart-seed001 --data x.csv --out m.json --effects scale --effect-alpha nan",
+        "identify --robot stewart-seed001 --data x.csv --out m.json --estimator ridge --ridge-k 0x1",
+        "identify --robot stewart-seed001 --data x.csv --out m.json --estimator pcr --pcr-components 0x10",
+        "diagnose --robot stewart-seed001 --data x.csv --json d.json --noise-um 0",
+        "diagnose --robot stewart-seed001 --data x.csv --json d.json --alpha 1e999"}) {
+    const ToolRun r = run_tool(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+  }
+  const MeasuredSet s = measured_set("options");
+  for (const char* effects : {"scale,scale", "thermal,nosuch", ","}) {
+    const ToolRun r = run_tool("identify --robot stewart-seed001 --data \"" + s.data + "\" --out \"" + kDir +
+                               "/o.json\" --effects " + std::string(effects));
+    EXPECT_EQ(r.code, 1) << effects;
+    EXPECT_EQ(lines(r.err), 1u) << r.err;
+    EXPECT_TRUE(contains(r.err, "--effects")) << r.err;
+  }
+  const ToolRun d = run_tool("diagnose --robot stewart-seed001 --data \"" + s.data + "\" --json \"" + kDir +
+                             "/o.json\" --effects cyclic,cyclic --quiet");
+  EXPECT_EQ(d.code, 1);
+  EXPECT_TRUE(contains(d.err, "'cyclic' is named twice")) << d.err;
+}

@@ -153,7 +153,7 @@ TEST(identifyStewartCalibration, TooFewNodesAndDegeneratePosesAreClearErrors) {
     calibrate_stewart(nominal, t);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("at least 7"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at least 8"), std::string::npos) << e.what();
   }
   // Ten copies of one pose: the 42 parameters cannot be separated.
   std::string text = "id,x,y,z,rx,ry,rz,mx,my,mz,mrx,mry,mrz\n";

@@ -6,10 +6,28 @@
 #include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "kincal/identify/csv.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal_app {
+
+// Option values as a user means them (issue #10 item 10): a decimal number
+// (optional sign, digits, point, exponent — no hex, no "", no NaN/Inf) in
+// [lo, hi] (lo excluded if `open_low`), or a decimal integer ≥ lo.
+CLI::Validator decimal(double lo, double hi, bool open_low = false);
+CLI::Validator whole_number(long long lo);
+// An effect list (`--effects a,b`): known effects, each once.
+std::vector<std::string> effect_list(const std::string& list);
+
+// One warning on stderr, on one line whatever strings from the input it quotes.
+void warn(const std::string& line);
+
+// A measurement file for identify / diagnose, with its warnings, and one
+// warning per row and joint outside the robot file's limits (the rows are
+// used: identify/joint_limits.hpp).
+kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& robot, const std::string& path);
 
 struct DiagnoseArgs {
   std::string robot, data, json, report, effects;

@@ -26,9 +26,11 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
   d->add_option("--report", a.report, "REPORT.html to write (self-contained, inline SVG)");
   d->add_option("--noise-um", a.noise_um,
                 "tracker uncertainty, sigma per measured coordinate in um (6-UPS: orientation counted at 200 mm); "
-                "default: from repeated nodes, else estimated");
+                "default: from repeated nodes, else estimated")
+      ->check(decimal(0, HUGE_VAL, true));
   d->add_option("--effects", a.effects, "candidate effects to test, comma separated (default: all registered)");
-  d->add_option("--alpha", a.alpha, "family-wise significance level (Holm), default 0.01");
+  d->add_option("--alpha", a.alpha, "family-wise significance level (Holm), default 0.01")
+      ->check(decimal(0, 1, true));
   d->add_flag("--quiet", a.quiet, "no progress lines on stderr");
   return d;
 }
@@ -53,10 +55,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   if (!a.report.empty()) outs.push_back(a.report);
   ki::check_outputs(outs, inputs);
   const ki::Robot robot = ki::load_robot(a.robot);
-  ki::PoseTableOptions popt;
-  popt.joint_count = ki::Robot::joint_count();
-  popt.warn = [](const std::string& line) { std::cerr << line << "\n"; };
-  const ki::PoseTable data = ki::read_pose_table(a.data, popt);
+  const ki::PoseTable data = read_measurements(robot, a.data);
 
   ki::DiagnoseOptions opt;
   if (a.noise_um) {
@@ -66,13 +65,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   if (!(a.alpha > 0 && a.alpha < 1)) throw ki::InputError("--alpha must be in (0, 1)");
   opt.alpha = a.alpha;
   opt.progress = !a.quiet;
-  std::stringstream list(a.effects);
-  for (std::string name; std::getline(list, name, ',');) {
-    if (name.empty()) continue;
-    if (ki::find_effect(name) == nullptr)
-      throw ki::InputError("--effects: unknown effect '" + name + "' (known: " + ki::effect_names() + ")");
-    opt.candidates.push_back(name);
-  }
+  if (!a.effects.empty()) opt.candidates = effect_list(a.effects);
 
   const ki::Diagnosis d = ki::diagnose(robot, data, opt);
   ki::OutputFiles outputs(inputs);

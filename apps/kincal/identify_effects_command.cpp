@@ -19,13 +19,8 @@ namespace kincal_app {
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
                               double effect_alpha, double ridge_k) {
-  std::vector<std::string> names;
-  std::stringstream list(effects);
-  for (std::string name; std::getline(list, name, ',');)
-    if (!name.empty()) names.push_back(name);
-  ki::PoseTableOptions options;
-  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
-  const ki::PoseTable data = ki::read_pose_table(data_path, options);
+  const std::vector<std::string> names = effect_list(effects);
+  const ki::PoseTable data = read_measurements(robot, data_path);
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
   opt.estimator = estimator;

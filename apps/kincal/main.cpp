@@ -6,6 +6,8 @@
 // subcommands that are not implemented yet.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -13,6 +15,7 @@
 #include <exception>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -28,6 +31,8 @@
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/effects.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/robot.hpp"
@@ -40,12 +45,87 @@
 
 namespace ki = kincal::identify;
 
+// Warnings are one line each, whatever strings from the input they quote.
+void kincal_app::warn(const std::string& line) { std::cerr << ki::one_line(line) << "\n"; }
+
+namespace {
+// The strict decimal syntax of decimal() / whole_number(): the whole string,
+// one optional sign, no hex, finite.
+bool strict_decimal(const std::string& v, double& out) {
+  std::string_view s = v;
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  if (s.empty() || s.front() == '+' || (v.front() == '+' && s.front() == '-')) return false;
+  for (const char c : s)
+    if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' || c == '-' || c == '+'))
+      return false;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out, std::chars_format::general);
+  return ec == std::errc() && ptr == s.data() + s.size() && std::isfinite(out);
+}
+std::string number_text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+}  // namespace
+
+CLI::Validator kincal_app::decimal(double lo, double hi, bool open_low) {
+  const std::string range = std::string(open_low ? "(" : "[") + number_text(lo) + ", " +
+                            (std::isfinite(hi) ? number_text(hi) + "]" : std::string("inf)"));
+  return CLI::Validator(
+      [lo, hi, open_low, range](std::string& v) {
+        double x = 0;
+        if (!strict_decimal(v, x)) return "must be a decimal number, not '" + v + "'";
+        if (x < lo || (open_low && x == lo) || x > hi) return "must be in " + range + ", not " + v;
+        return std::string();
+      },
+      "NUMBER in " + range);
+}
+
+CLI::Validator kincal_app::whole_number(long long lo) {
+  return CLI::Validator(
+      [lo](std::string& v) {
+        long long x = 0;
+        std::string_view s = v;
+        if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+        const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), x);
+        if (s.empty() || ec != std::errc() || ptr != s.data() + s.size())
+          return "must be a decimal integer, not '" + v + "'";
+        if (x < lo) return "must be at least " + std::to_string(lo) + ", not " + v;
+        return std::string();
+      },
+      "INT >= " + std::to_string(lo));
+}
+
+std::vector<std::string> kincal_app::effect_list(const std::string& list) {
+  std::vector<std::string> names;
+  std::stringstream in(list);
+  for (std::string name; std::getline(in, name, ',');) {
+    if (name.empty()) continue;
+    if (ki::find_effect(name) == nullptr)
+      throw ki::InputError("--effects: unknown effect '" + name + "' (known: " + ki::effect_names() + ")");
+    if (std::find(names.begin(), names.end(), name) != names.end())
+      throw ki::InputError("--effects: '" + name + "' is named twice");
+    names.push_back(name);
+  }
+  if (names.empty()) throw ki::InputError("--effects: no effect named in '" + list + "'");
+  return names;
+}
+
+ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::string& path) {
+  ki::PoseTableOptions options;
+  options.joint_count = ki::Robot::joint_count();
+  options.warn = warn;
+  ki::PoseTable data = ki::read_pose_table(path, options);
+  for (const std::string& w : ki::joint_limit_warnings(robot, data)) warn(w);
+  return data;
+}
+
 namespace {
 
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
 
-void warn(const std::string& line) { std::cerr << line << "\n"; }
+using kincal_app::warn;
 
 struct SimulateArgs {
   std::string robot, poses, out, errors;
@@ -110,7 +190,7 @@ int run_robot(const std::string& name, const std::string& out, bool list_params)
 
 int run_errors(const std::string& data, const std::string& reference, bool per_row) {
   ki::PoseTableOptions options;
-  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+  options.warn = warn;
   const ki::PoseTable table = ki::read_pose_table(data, options);
   const ki::PoseErrorReport report =
       reference.empty() ? ki::pose_errors(table) : ki::pose_differences(table, ki::read_pose_table(reference, options));
@@ -327,15 +407,12 @@ int run_identify(const IdentifyArgs& a) {
     if (!a.ridge_k.empty() && a.estimator != "ridge")
       throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
                            (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
-    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);
+    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
+    (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
                                                  k);
   }
-  if (robot.is_hybrid()) {
-    ki::PoseTableOptions options;
-    options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
-    return run_identify_hybrid(a, robot, ki::read_pose_table(a.data, options));
-  }
+  if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
   if (estimator == "liu")
     throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
@@ -343,9 +420,7 @@ int run_identify(const IdentifyArgs& a) {
   if (!a.coarse_layers.empty()) throw ki::InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
   ki::StewartCalibrationOptions so;
   so.estimator = estimator_options(a, estimator);
-  ki::PoseTableOptions options;
-  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
-  const ki::PoseTable data = ki::read_pose_table(a.data, options);
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data);
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
   const ki::StewartCalibration c = ki::calibrate_stewart(robot, data, so);
   std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "
@@ -430,7 +505,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
     throw ki::InputError(model_path, 0, 0, e.message());
   }
   ki::PoseTableOptions options;
-  options.warn = [](const std::string& w) { std::cerr << w << "\n"; };
+  options.warn = warn;
   const ki::PoseTable poses = ki::read_pose_table(poses_path, options);
   ki::PoseTable out;
   out.file = out_path;
@@ -515,8 +590,10 @@ int run(int argc, char** argv) {
   simulate->add_option("--effect", sim.effects,
                        "NAME:PARAM=VALUE, a physical effect of the actual machine (repeatable; e.g. scale:s1=1e-4, "
                        "thermal:c=1.2e-5; 'kincal effects' lists them)");
-  simulate->add_option("--noise-mm", sim.noise_mm, "sigma of Gaussian noise on positions, mm (default 0)");
-  simulate->add_option("--noise-rad", sim.noise_rad, "sigma of Gaussian noise on angles, rad (default 0)");
+  simulate->add_option("--noise-mm", sim.noise_mm, "sigma of Gaussian noise on positions, mm (default 0)")
+      ->check(kincal_app::decimal(0, HUGE_VAL));
+  simulate->add_option("--noise-rad", sim.noise_rad, "sigma of Gaussian noise on angles, rad (default 0)")
+      ->check(kincal_app::decimal(0, HUGE_VAL));
   simulate->add_option("--seed", sim.seed, "noise seed (std::mt19937_64, default 1)")
       ->check(CLI::Validator(
           [](std::string& v) {
@@ -556,25 +633,24 @@ int run(int argc, char** argv) {
       ->check(CLI::Validator(
           [](std::string& v) {
             if (v == "gcv" || v == "hkb") return std::string();
-            char* end = nullptr;
-            const double k = std::strtod(v.c_str(), &end);
-            return !v.empty() && end == v.c_str() + v.size() && std::isfinite(k) && k >= 0
-                       ? std::string()
-                       : std::string("must be gcv, hkb or a number >= 0, not '" + v + "'");
+            double k = 0;
+            return strict_decimal(v, k) && k >= 0 ? std::string()
+                                                   : std::string("must be gcv, hkb or a number >= 0, not '" + v + "'");
           },
           "K"));
   identify->add_option("--pcr-components", ident.pcr_components,
                        "PCR: number of principal components kept (default: by generalized cross-validation)")
-      ->check(CLI::PositiveNumber);
+      ->check(kincal_app::whole_number(1));
   identify->add_option("--coarse-layers", ident.coarse_layers,
                        "hybrid: layers whose rows run the coarse stage, e.g. 2 (seed 000 Sec. 5: the middle layer); "
                        "default: the cal rows")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(kincal_app::whole_number(std::numeric_limits<long long>::min()));
   identify->add_option("--effects", ident.effects, "effects to include, e.g. scale,thermal ('kincal effects' lists them)");
   identify->add_option("--effect-alpha", ident.effect_alpha,
                        "with --effects: an effect parameter not significant at this family-wise level (t test in the "
                        "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.05)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(kincal_app::decimal(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
   identify->add_flag("--exclude-outliers", ident.exclude_outliers,
                      "fit without the nodes found inconsistent with the others (default: report them only)");
@@ -616,7 +692,7 @@ int run(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "kincal: " << e.what() << " (run 'kincal --help')\n";
+    std::cerr << "kincal: " << ki::one_line(e.what()) << " (run 'kincal --help')\n";
     return kExitUsage;
   }
 
@@ -639,7 +715,7 @@ int main(int argc, char** argv) {
   } catch (const ki::InputError& e) {
     std::cerr << "kincal: " << e.what() << "\n";
   } catch (const std::exception& e) {
-    std::cerr << "kincal: internal error: " << e.what() << "\n";
+    std::cerr << "kincal: internal error: " << ki::one_line(e.what()) << "\n";
   } catch (...) {
     std::cerr << "kincal: internal error (unknown exception)\n";
   }

@@ -142,7 +142,11 @@ CsvDocument parse_csv(std::string_view text, const std::string& file) {
 double parse_number(const CsvField& field, std::size_t line, const std::string& file, const std::string& column_name) {
   std::string_view s = field.text;
   if (s.empty()) throw InputError(file, line, field.column, "empty value in column '" + column_name + "'");
+  // One optional sign: "+-5" is not −5 (from_chars would take the '-' after a
+  // stripped '+').
   if (s.front() == '+') s.remove_prefix(1);
+  if (!s.empty() && (s.front() == '+' || (field.text.front() == '+' && s.front() == '-')))
+    throw InputError(file, line, field.column, "not a number: " + quoted(field.text) + " in column '" + column_name + "'");
   double v = 0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, std::chars_format::general);
   if (ec == std::errc::result_out_of_range)
@@ -170,6 +174,8 @@ long long parse_integer(const CsvField& field, std::size_t line, const std::stri
   std::string_view s = field.text;
   if (s.empty()) throw InputError(file, line, field.column, "empty value in column '" + column_name + "'");
   if (s.front() == '+') s.remove_prefix(1);
+  if (!s.empty() && (s.front() == '+' || (field.text.front() == '+' && s.front() == '-')))
+    throw InputError(file, line, field.column, "not an integer: " + quoted(field.text) + " in column '" + column_name + "'");
   long long v = 0;
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc() || ptr != s.data() + s.size())

@@ -18,10 +18,33 @@ std::string format_location(const std::string& file, std::size_t line, std::size
   return out;
 }
 
+std::string one_line(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c < 0x20 || c == 0x7f) {
+      static const char* hex = "0123456789abcdef";
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
+
 namespace {
 std::string compose(const std::string& file, std::size_t line, std::size_t column, const std::string& message) {
-  const std::string where = format_location(file, line, column);
-  return where.empty() ? message : where + ": " + message;
+  const std::string where = format_location(one_line(file), line, column);
+  return where.empty() ? one_line(message) : where + ": " + one_line(message);
 }
 }  // namespace
 

@@ -2,6 +2,8 @@
 
 #include <set>
 
+#include "kincal/identify/input_error.hpp"
+
 namespace kincal::identify::detail {
 
 std::string child_path(const std::string& parent, const std::string& key) {
@@ -130,6 +132,30 @@ class Walker {
 };
 
 }  // namespace
+
+void check_json_depth(std::string_view text, const std::string& file, int max_depth) {
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;  // the escaped character
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '{' || c == '[') {
+      if (++depth > max_depth) {
+        const TextPosition p = position_of(text, i);
+        throw InputError(file, p.line, p.column,
+                         "JSON nested deeper than " + std::to_string(max_depth) + " levels (no kincal file needs more than 5)");
+      }
+    } else if (c == '}' || c == ']') {
+      --depth;
+    }
+  }
+}
 
 JsonLocations locate_json(std::string_view text) {
   JsonLocations out;

@@ -30,6 +30,12 @@ struct JsonLocations {
 // the result is incomplete but the walk stays in bounds.
 JsonLocations locate_json(std::string_view text);
 
+// Refuses JSON nested deeper than `max_depth` arrays / objects before any
+// parser sees it (issue #10 item 8: a MODEL.json whose "robot" was nested
+// ~3 000 deep overflowed the stack in json::dump()): InputError at the line and
+// column of the first bracket too deep. Strings are skipped.
+void check_json_depth(std::string_view text, const std::string& file, int max_depth = 64);
+
 std::string child_path(const std::string& parent, const std::string& key);
 std::string child_path(const std::string& parent, std::size_t index);
 

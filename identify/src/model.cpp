@@ -1,11 +1,12 @@
 #include "kincal/identify/model.hpp"
 
-#include "kincal/identify/files.hpp"
-
-#include <cmath>
 #include <algorithm>
-#include <fstream>
+#include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
+
+#include "json_locator.hpp"
+#include "kincal/identify/files.hpp"
 
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -19,21 +20,6 @@ constexpr const char* kModelFormat = "kincal-model";
 constexpr int kModelVersion = 1;
 
 using nlohmann::json;
-
-[[noreturn]] void fail(const std::string& file, const std::string& message) { throw InputError(file, 0, 0, message); }
-
-const json& require(const json& j, const char* key, const std::string& file) {
-  const auto it = j.find(key);
-  if (it == j.end()) fail(file, std::string("missing key \"") + key + "\"");
-  return *it;
-}
-
-double finite_number(const json& j, const std::string& what, const std::string& file) {
-  if (!j.is_number()) fail(file, what + " must be a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(file, what + " is not finite");
-  return v;
-}
 
 }  // namespace
 
@@ -74,9 +60,70 @@ void write_model_file(const CalibrationModel& model, const std::string& path, co
   write_output_file(path, model_to_json(model), inputs);
 }
 
-static CalibrationModel parse_model_json(const json& j, const std::string& file);
+namespace {
+class ModelReader;
+}
+static CalibrationModel parse_model_json(const json& j, const ModelReader& r, const std::string& file);
+
+namespace {
+
+// MODEL.json's schema checks with positions (issue #10 items 9, 11): every
+// error names file, line and column; duplicate keys anywhere (the embedded
+// robot included), a parameter given twice, or the hybrid's encoder offset
+// under both of its names are errors, never silently summed or overridden.
+class ModelReader {
+ public:
+  ModelReader(const std::string& text, const std::string& file)
+      : text_(text), file_(file), loc_(detail::locate_json(text)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
+    const TextPosition p = position_of(text_, loc_.value_offset(path));
+    throw InputError(file_, p.line, p.column, message);
+  }
+  void check_duplicates() const {
+    if (loc_.duplicates.empty()) return;
+    const TextPosition p = position_of(text_, loc_.duplicates.front().offset);
+    throw InputError(file_, p.line, p.column, "duplicate key \"" + loc_.duplicates.front().path + "\"");
+  }
+  const json& require(const json& j, const std::string& path, const char* key) const {
+    if (!j.is_object()) fail(path, (path.empty() ? std::string("a model file") : path) + " must be a JSON object");
+    const auto it = j.find(key);
+    if (it == j.end()) fail(path, std::string("missing key \"") + key + "\"");
+    return *it;
+  }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) fail(path, path + " must be a string");
+    return j.get<std::string>();
+  }
+  double finite_number(const json& j, const std::string& path, const std::string& what) const {
+    if (!j.is_number()) fail(path, what + " must be a number");
+    const double v = j.get<double>();
+    if (!std::isfinite(v)) fail(path, what + " is not finite");
+    return v;
+  }
+
+ private:
+  const std::string& text_;
+  const std::string& file_;
+  detail::JsonLocations loc_;
+};
+
+// The hybrid's encoder offsets have two names each: PARAMS.csv's dq1..dq3,
+// dtheta4..dtheta6 and seed 000's source errors dxi_3_1 … dxi_6_4.
+std::string encoder_alias(const std::string& name) {
+  static const char* pairs[][2] = {{"dq1", "dxi_3_1"},     {"dq2", "dxi_3_2"},     {"dq3", "dxi_3_3"},
+                                   {"dtheta4", "dxi_4_4"}, {"dtheta5", "dxi_5_4"}, {"dtheta6", "dxi_6_4"}};
+  for (const auto& p : pairs) {
+    if (name == p[0]) return p[1];
+    if (name == p[1]) return p[0];
+  }
+  return {};
+}
+
+}  // namespace
 
 CalibrationModel parse_model(const std::string& text, const std::string& file) {
+  detail::check_json_depth(text, file);
   json j;
   try {
     j = json::parse(text);
@@ -86,48 +133,70 @@ CalibrationModel parse_model(const std::string& text, const std::string& file) {
   } catch (const json::exception& e) {
     throw InputError(file, 0, 0, std::string("malformed JSON (") + e.what() + ")");
   }
+  const ModelReader r(text, file);
+  r.check_duplicates();
   try {
-    return parse_model_json(j, file);
+    return parse_model_json(j, r, file);
   } catch (const json::exception& e) {  // a value of the wrong type
     throw InputError(file, 0, 0, std::string("malformed model: ") + e.what());
   }
 }
 
-static CalibrationModel parse_model_json(const json& j, const std::string& file) {
-  if (!j.is_object()) fail(file, "a model file is a JSON object");
-  if (require(j, "format", file) != kModelFormat) fail(file, std::string("\"format\" must be \"") + kModelFormat + "\"");
-  if (require(j, "version", file) != kModelVersion) fail(file, "unsupported model version (this kincal reads version 1)");
+static CalibrationModel parse_model_json(const json& j, const ModelReader& r, const std::string& file) {
+  if (!j.is_object()) r.fail("", "a model file is a JSON object");
+  if (r.require(j, "", "format") != kModelFormat)
+    r.fail("/format", std::string("\"format\" must be \"") + kModelFormat + "\"");
+  if (r.require(j, "", "version") != kModelVersion)
+    r.fail("/version", "unsupported model version (this kincal reads version 1)");
   CalibrationModel m;
-  m.nominal = parse_robot(require(j, "robot", file).dump(), file + " (robot)");
-  const json& est = require(j, "estimator", file);
-  m.estimator = require(est, "name", file).get<std::string>();
-  if (const auto s = est.find("settings"); s != est.end())
-    for (const auto& [k, v] : s->items()) m.settings[k] = finite_number(v, "estimator setting " + k, file);
+  try {
+    m.nominal = parse_robot(r.require(j, "", "robot").dump(), file);
+  } catch (const InputError& e) {
+    r.fail("/robot", "robot: " + e.message());
+  }
+  const json& est = r.require(j, "", "estimator");
+  m.estimator = r.string(r.require(est, "/estimator", "name"), "/estimator/name");
+  if (const auto s = est.find("settings"); s != est.end()) {
+    if (!s->is_object()) r.fail("/estimator/settings", "\"settings\" must be an object");
+    for (const auto& [k, v] : s->items())
+      m.settings[k] = r.finite_number(v, "/estimator/settings/" + k, "estimator setting " + k);
+  }
   if (const auto d = j.find("data"); d != j.end() && d->is_string()) m.data_file = d->get<std::string>();
-  const json& params = require(j, "parameters", file);
-  if (!params.is_array()) fail(file, "\"parameters\" must be an array");
+  const json& params = r.require(j, "", "parameters");
+  if (!params.is_array()) r.fail("/parameters", "\"parameters\" must be an array");
   const std::vector<std::string> valid = parameter_names(m.nominal);
-  for (const json& p : params) {
+  std::map<std::string, std::size_t> seen;  // name → index
+  for (std::size_t k = 0; k < params.size(); ++k) {
+    const json& p = params[k];
+    const std::string at = "/parameters/" + std::to_string(k);
     ModelParameter mp;
-    mp.name = require(p, "name", file).get<std::string>();
+    mp.name = r.string(r.require(p, at, "name"), at + "/name");
     if (std::find(valid.begin(), valid.end(), mp.name) == valid.end())
-      fail(file, "unknown parameter \"" + mp.name + "\" for a " + m.nominal.family() + " robot");
-    mp.value = finite_number(require(p, "value", file), "value of " + mp.name, file);
+      r.fail(at + "/name", "unknown parameter \"" + mp.name + "\" for a " + m.nominal.family() + " robot");
+    if (const auto it = seen.find(mp.name); it != seen.end())
+      r.fail(at, "parameter \"" + mp.name + "\" is given twice (also entry " + std::to_string(it->second + 1) + ")");
+    if (m.nominal.is_hybrid())
+      if (const auto it = seen.find(encoder_alias(mp.name)); it != seen.end())
+        r.fail(at, "parameter \"" + mp.name + "\" is the same encoder offset as \"" + it->first + "\" (entry " +
+                       std::to_string(it->second + 1) + "); give it once");
+    seen[mp.name] = k;
+    mp.value = r.finite_number(r.require(p, at, "value"), at + "/value", "value of " + mp.name);
     if (const auto se = p.find("standard_error"); se != p.end())
-      mp.standard_error = finite_number(*se, "standard_error of " + mp.name, file);
+      mp.standard_error = r.finite_number(*se, at + "/standard_error", "standard_error of " + mp.name);
     if (const auto id = p.find("identifiable"); id != p.end() && id->is_boolean()) mp.identifiable = id->get<bool>();
     m.parameters.push_back(mp);
   }
   if (const auto effects = j.find("effects"); effects != j.end()) {
-    if (!effects->is_object()) fail(file, "\"effects\" must be an object of effect name -> {parameter: value}");
+    if (!effects->is_object()) r.fail("/effects", "\"effects\" must be an object of effect name -> {parameter: value}");
     for (const auto& [name, params_of] : effects->items()) {
-      if (!params_of.is_object()) fail(file, "effect \"" + name + "\" must be an object of parameter -> value");
+      const std::string at = "/effects/" + name;
+      if (!params_of.is_object()) r.fail(at, "effect \"" + name + "\" must be an object of parameter -> value");
       for (const auto& [pname, value] : params_of.items()) {
-        const double v = finite_number(value, "effect " + name + ":" + pname, file);
+        const double v = r.finite_number(value, at + "/" + pname, "effect " + name + ":" + pname);
         try {
           m.effects.set(m.nominal, name, pname, v);
         } catch (const InputError& e) {
-          fail(file, e.message());
+          r.fail(at + "/" + pname, e.message());
         }
       }
     }

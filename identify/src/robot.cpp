@@ -255,7 +255,14 @@ Robot parse_stewart(const json& doc, const Reader& r) {
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
   robot.geometry = g;
   Vec6<double> q;
-  const Status s = stewart_ik(g, g.home, q);
+  // With the Jacobian: a geometry whose legs cannot hold the platform (six
+  // base joints at one point, collinear platform joints, …) is singular at
+  // every pose, and simulate would otherwise report measured == commanded.
+  Mat6<double> J;
+  const Status s = stewart_ik(g, g.home, q, &J);
+  if (s == Status::Singular)
+    r.fail("/base_joints", "the geometry is singular at its home pose: the legs cannot hold the platform (joints "
+                           "at one point or on one line?)");
   if (s != Status::Ok) r.fail("/home", std::string("the home pose is not reachable: ") + to_string(s));
   return robot;
 }
@@ -289,7 +296,13 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
   robot.geometry = make_hybrid_geometry(d);
   Vec6<double> q;
-  const Status s = robot.inverse(robot.home_pose(), q);
+  // With the Jacobian: degenerate joint layouts (base or platform joints at
+  // one point or on one line) are singular at the reference pose.
+  Mat6<double> J;
+  const Status s = hybrid_ik(robot.hybrid(), robot.home_pose(), q, &J);
+  if (s == Status::Singular)
+    r.fail("/base_joints", "the geometry is singular at its reference pose: the UPS limbs cannot hold the platform "
+                           "(joints at one point or on one line?)");
   if (s != Status::Ok)
     r.fail("/reference_extension", std::string("the reference pose is not reachable: ") + to_string(s));
   return robot;
@@ -298,6 +311,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
 }  // namespace
 
 Robot parse_robot(const std::string& text, const std::string& file) {
+  detail::check_json_depth(text, file);
   json doc;
   try {
     doc = json::parse(text);

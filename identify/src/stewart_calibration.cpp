@@ -69,11 +69,15 @@ std::vector<Node> calibration_nodes(const Robot& nominal, const PoseTable& data)
     }
     nodes.push_back(n);
   }
-  if (nodes.size() < 7)
+  // 7 nodes give 42 equations for 42 parameters: an exact fit, with nothing
+  // left to estimate the noise, the standard errors or an outlier (it failed
+  // further on, though the message said 7 were enough).
+  if (nodes.size() < 8)
     throw InputError(data.file, 0, 0,
                      "only " + std::to_string(nodes.size()) +
-                         " calibration nodes with a measured pose; the 42-parameter model needs at least 7 "
-                         "(6 equations each, seed 001 Section 3) and a well-spread set of poses");
+                         " calibration nodes with a measured pose; the 42-parameter model needs at least 8 "
+                         "(6 equations each, seed 001 Section 3, and some left over for the noise) and a "
+                         "well-spread set of poses");
   return nodes;
 }
 

@@ -29,6 +29,13 @@ class InputError : public std::runtime_error {
   std::string message_;
 };
 
+// `s` on one line: control characters written as escapes (\n, \r, \t,
+// \xNN), so a string from the input (an id, a parameter name, a file name)
+// cannot break an error or warning into several lines or start a line that
+// looks like the tool's own (issue #10 item 11). InputError's what() and the
+// tool's warnings go through it.
+std::string one_line(const std::string& s);
+
 // "FILE:LINE:COL" with the unknown parts left out ("FILE:LINE", "FILE", "").
 std::string format_location(const std::string& file, std::size_t line, std::size_t column);
 
