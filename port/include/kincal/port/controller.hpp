@@ -42,7 +42,9 @@
 //     port; missing_points saturates rather than wraps), a step back or a
 //     duplicate is answered with the held output (PortStatus::SequenceError:
 //     a producer that repeats or reorders points must not move the machine
-//     back along the path); producer overruns reported with it are counted;
+//     back along the path) and the count goes on from it (a producer that
+//     restarted its numbering holds one point, not the rest of the program);
+//     producer overruns reported with it are counted;
 //   - the point is compensated (core/compensation.hpp: status per failure,
 //     held output, events counted in the compensator state) and its command
 //     sent with the point's sequence number, status and flags. Every point
@@ -272,7 +274,7 @@ template <class Machine, class Registers, class Stream> class Controller {
       }
     }
     have_last_sequence_ = true;
-    if (!replayed) last_sequence_ = in.sequence;
+    last_sequence_ = in.sequence;  // resynchronised: a producer that restarted its count goes on from here
     if (in.producer_overruns > 0) {
       counters_.producer_overruns += in.producer_overruns;
       cmd.flags |= kCommandAfterInputOverrun;
