@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev       # tests, benchmarks
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # firmware
   qemu-system-arm                                  # firmware tests
+  clang libclang-rt-14-dev                         # libFuzzer targets (fuzz/): clang 14 ships libFuzzer there
   valgrind                                         # instruction counts
   python3                                          # small helpers in scripts/
 )

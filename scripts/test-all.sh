@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Sets everything up and runs every test: host (Release), host under
-# AddressSanitizer + UndefinedBehaviorSanitizer, and the firmware core checks
-# under qemu for the Cortex-M7 (double FPU) and the Cortex-M4F (float).
-# Usage: scripts/test-all.sh [host|sanitize|m7|m4f ...]   (default: all four)
+# AddressSanitizer + UndefinedBehaviorSanitizer, every reader under libFuzzer
+# for a bounded time (about a minute in all; fuzz/run.sh runs them longer), and
+# the firmware core checks under qemu for the Cortex-M7 (double FPU) and the
+# Cortex-M4F (float).
+# Usage: scripts/test-all.sh [host|sanitize|fuzz|m7|m4f ...]   (default: all five)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 
 jobs=${KINCAL_JOBS:-$(nproc)}
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(host sanitize m7 m4f)
+[ ${#stages[@]} -gt 0 ] || stages=(host sanitize fuzz m7 m4f)
 
 run_stage() {
   local name=$1; shift
@@ -40,11 +42,19 @@ for stage in "${stages[@]}"; do
   case $stage in
     host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
     sanitize) run_stage sanitize -DCMAKE_BUILD_TYPE=Debug -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_BENCHMARKS=OFF ;;
+    fuzz)     echo "=== fuzz: configure"
+              cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang \
+                    -DCMAKE_CXX_COMPILER=clang++ -DKINCAL_BUILD_FUZZERS=ON -DKINCAL_BUILD_TESTS=OFF \
+                    -DKINCAL_BUILD_BENCHMARKS=OFF > build/fuzz.configure.log 2>&1 || { cat build/fuzz.configure.log; exit 1; }
+              echo "=== fuzz: build"
+              cmake --build build/fuzz -j "$jobs" --target kincal_fuzzers
+              echo "=== fuzz: run (8 s per target)"
+              fuzz/run.sh build/fuzz 8 ;;
     m7)       host_tool
               run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
     m4f)      host_tool
               run_stage m4f -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m4f.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
-    *) echo "unknown stage '$stage' (host, sanitize, m7, m4f)" >&2; exit 2 ;;
+    *) echo "unknown stage '$stage' (host, sanitize, fuzz, m7, m4f)" >&2; exit 2 ;;
   esac
 done
 echo "=== all stages passed: ${stages[*]}"
