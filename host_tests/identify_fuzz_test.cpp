@@ -41,13 +41,17 @@ std::string mutate(std::string s, std::mt19937_64& rng) {
   return s;
 }
 
-// Parses with `parse`; returns 1 if it parsed, 0 if it threw InputError, and
-// fails the test on anything else.
-template <class F> int outcome(F&& parse, const std::string& input) {
+// Parses with `parse`; returns 1 if it parsed, 0 if it threw InputError —
+// whose message must be one line naming `file` (issue #10: the replay never
+// checked that) — and fails the test on anything else.
+template <class F> int outcome(F&& parse, const std::string& input, const std::string& file) {
   try {
     parse(input);
     return 1;
-  } catch (const ki::InputError&) {
+  } catch (const ki::InputError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.find('\n'), std::string::npos) << "not one line: " << m;
+    EXPECT_EQ(m.rfind(file, 0), 0u) << "does not name " << file << ": " << m;
     return 0;
   } catch (const std::exception& e) {
     ADD_FAILURE() << "unexpected exception " << e.what() << " for input:\n" << input;
@@ -80,7 +84,7 @@ TEST(identifyFuzz, PoseCsvMutations) {
           ki::SimulateReport rep;
           ki::simulate(robot, robot, t, {}, rep);
         },
-        mutate(valid, rng));
+        mutate(valid, rng), "f.csv");
   }
   EXPECT_GT(parsed, 0);  // the mutations are not all fatal: both paths are exercised
   EXPECT_LT(parsed, 3000);
@@ -94,7 +98,7 @@ TEST(identifyFuzz, ParameterCsvMutations) {
   int parsed = 0;
   for (int i = 0; i < 2000; ++i)
     parsed += outcome([&](const std::string& s) { ki::apply_parameters(robot, ki::parse_parameters(s, "p.csv", robot)); },
-                      mutate(valid, rng));
+                      mutate(valid, rng), "p.csv");
   EXPECT_GT(parsed, 0);
 }
 
@@ -111,7 +115,7 @@ TEST(identifyFuzz, RobotJsonMutations) {
             (void)r.inverse(r.home_pose(), q);
             (void)ki::robot_to_json(r);
           },
-          mutate(valid, rng));
+          mutate(valid, rng), "r.json");
     EXPECT_GT(parsed, 0) << name;
     EXPECT_LT(parsed, 2000) << name;
   }
@@ -122,7 +126,7 @@ TEST(identifyFuzz, PathologicalInputs) {
                                            std::string(1, '\0'), "\xef\xbb\xbf", "\"", "{\"format\":}", "null",
                                            std::string(10000, ','), "id\n" + std::string(3000, '\n')};
   for (const std::string& s : inputs) {
-    outcome([](const std::string& t) { ki::parse_robot(t, "r.json"); }, s);
-    outcome([](const std::string& t) { ki::parse_pose_table(t, "f.csv"); }, s);
+    outcome([](const std::string& t) { ki::parse_robot(t, "r.json"); }, s, "r.json");
+    outcome([](const std::string& t) { ki::parse_pose_table(t, "f.csv"); }, s, "f.csv");
   }
 }
