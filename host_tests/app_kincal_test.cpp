@@ -690,3 +690,37 @@ TEST(appKincal, OptionValuesAreStrict) {
   EXPECT_EQ(d.code, 1);
   EXPECT_TRUE(contains(d.err, "'cyclic' is named twice")) << d.err;
 }
+
+// Issue #11 item 3: a bound below what the identified model needs — here a
+// seed 001 description whose `max_correction` was set to 20 µm by hand, and
+// Table 3's errors (corrections of ~0.1 mm) — makes `identify` warn, naming
+// the key; `compensate` with the description the model was not identified
+// with says so instead of the generic robot mismatch.
+TEST(appKincal, IdentifyWarnsWhenTheModelNeedsMoreThanTheRobotsBound) {
+  const ToolRun described = run_tool("robot --robot stewart-seed001 --out \"" + kDir + "/seed001.json\"");
+  ASSERT_EQ(described.code, 0) << described.err;
+  std::string text = ki::read_text_file(kDir + "/seed001.json");
+  const std::string tight_text = std::string(text).insert(text.find("\"screw_lead\""), "\"max_correction\": 0.02,\n  ");
+  const std::string tight = write("seed001-tight.json", tight_text);
+  const std::string data = kDir + "/tight-data.csv";
+  ASSERT_EQ(run_tool("simulate --robot \"" + tight + "\" --poses \"" + kExamples + "/seed001/grid_poses.csv\" --errors \"" +
+                     kExamples + "/seed001/errors.csv\" --noise-mm 0.001 --out \"" + data + "\"")
+                .code,
+            0);
+  const ToolRun r = run_tool("identify --robot \"" + tight + "\" --data \"" + data + "\" --out \"" + kDir +
+                             "/tight-model.json\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(r.err, "needs corrections above the bound")) << r.err;
+  EXPECT_TRUE(contains(r.err, "'max_correction'")) << r.err;
+  // The default bound (5 mm) is far above this model's need: no warning.
+  const ToolRun fine = run_tool("identify --robot stewart-seed001 --data \"" + data + "\" --out \"" + kDir +
+                                "/fine-model.json\"");
+  ASSERT_EQ(fine.code, 0) << fine.err;
+  EXPECT_FALSE(contains(fine.err, "max_correction")) << fine.err;
+  // The tight model with the built-in (default-bound) description.
+  const ToolRun other = run_tool("compensate --robot stewart-seed001 --model \"" + kDir + "/tight-model.json\" --poses \"" +
+                                 kExamples + "/seed001/grid_poses.csv\" --out \"" + kDir + "/tight-q.csv\"");
+  EXPECT_EQ(other.code, 1);
+  EXPECT_TRUE(contains(other.err, "another 'max_correction'")) << other.err;
+  EXPECT_EQ(lines(other.err), 1u) << other.err;
+}

@@ -25,6 +25,7 @@
 #include "kincal/identify/robot.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
+#include "large_hexapod.hpp"
 
 namespace ki = kincal::identify;
 using kincal::Pose;
@@ -180,26 +181,7 @@ TEST(identifyJointLimits, RowsInsideTheLimitsGiveNoWarning) {
 // machines where nodes' FK fails; the damped step must converge to the truth.
 // Random poses over x, y ±150 mm, z 650–950 mm, tilts ±8°, yaw ±10°; noise-free
 // measurements from core's FK (the test's own generator).
-namespace {
-
-ki::Robot large_hexapod() {
-  std::string base, platform;
-  for (int i = 0; i < 6; ++i) {
-    const double pair = (i / 2) * 2 * M_PI / 3, side = (i % 2 == 0 ? -1 : 1);
-    const double ab = pair + side * 12 * M_PI / 180, ap = pair + M_PI / 3 + side * (-48) * M_PI / 180;
-    base += std::string(i ? ", " : "") + "[" + std::to_string(330 * std::cos(ab)) + ", " +
-            std::to_string(330 * std::sin(ab)) + ", 0.0]";
-    platform += std::string(i ? ", " : "") + "[" + std::to_string(190 * std::cos(ap)) + ", " +
-                std::to_string(190 * std::sin(ap)) + ", 0.0]";
-  }
-  const std::string json = R"({"format": "kincal-robot", "version": 1, "family": "stewart-6ups", "name": "large-hexapod",
-    "units": {"length": "mm", "angle": "rad"}, "base_joints": [)" + base + R"(], "platform_joints": [)" + platform +
-                           R"(], "stroke": {"min": [600, 600, 600, 600, 600, 600], "max": [1100, 1100, 1100, 1100, 1100, 1100]},
-    "length_offset": [0, 0, 0, 0, 0, 0], "home": {"x": 0, "y": 0, "z": 800, "rx": 0, "ry": 0, "rz": 0}})";
-  return ki::parse_robot(json, "large-hexapod.json");
-}
-
-}  // namespace
+using kincal_test::large_hexapod;
 
 TEST(identifyLargeErrors, SixUpsOfAnotherSizeConvergesFromMillimetreErrors) {
   const ki::Robot robot = large_hexapod();

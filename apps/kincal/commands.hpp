@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal_app {
@@ -28,6 +29,11 @@ void warn(const std::string& line);
 // warning per row and joint outside the robot file's limits (the rows are
 // used: identify/joint_limits.hpp).
 kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& robot, const std::string& path);
+
+// Warns (one line) when the identified model needs corrections above the
+// robot's correction bound on the measured poses (issue #11 item 3), naming
+// the key that raises it.
+void warn_correction_need(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
 
 struct DiagnoseArgs {
   std::string robot, data, json, report, effects;

@@ -28,6 +28,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   opt.alpha = effect_alpha;
   ki::EffectCalibrationReport report;
   const ki::CalibrationModel model = ki::calibrate_with_effects(robot, data, names, opt, &report);
+  warn_correction_need(model, data);
   for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
     std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
   for (const ki::HeldParameter& h : report.held) {

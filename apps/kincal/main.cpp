@@ -120,6 +120,11 @@ ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::s
   return data;
 }
 
+void kincal_app::warn_correction_need(const ki::CalibrationModel& model, const ki::PoseTable& data) {
+  const std::string w = ki::correction_need_warning(ki::correction_need(model, data));
+  if (!w.empty()) warn(data.file + ": warning: " + w);
+}
+
 namespace {
 
 constexpr int kExitError = 1;
@@ -364,6 +369,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
   ki::print_pose_error_report(after, std::cout, false);
   const ki::CalibrationModel model = ki::hybrid_model(robot, used, std::nullopt, a.data);
+  kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   if (!a.json.empty()) {
@@ -451,6 +457,7 @@ int run_identify(const IdentifyArgs& a) {
   for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
   const ki::StewartCalibration& used = a.exclude_outliers && !search.removed.empty() ? search.rest : c;
   const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
+  kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
@@ -490,9 +497,16 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   ki::check_outputs({out_path}, inputs);
   const ki::Robot robot = ki::load_robot(robot_name);
   const ki::CalibrationModel model = ki::read_model_file(model_path);
-  if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot))
+  if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot)) {
+    ki::Robot same_bound = robot;
+    same_bound.max_correction = model.nominal.max_correction;
+    if (ki::robot_to_json(model.nominal) == ki::robot_to_json(same_bound))
+      throw ki::InputError(model_path, 0, 0,
+                           "was identified with another 'max_correction' than " + robot_name +
+                               " has; the model carries the bound into the table: identify again with " + robot_name);
     throw ki::InputError(model_path, 0, 0,
                          "was identified on robot '" + model.nominal.name + "', not on " + robot_name);
+  }
   // The controller's own routine (core/compensation.hpp) on the table the
   // firmware gets from `kincal table`: 6-UPS IK of the calibrated geometry
   // (seed 001); hybrid: the pose corrected by the predicted error twist, then
@@ -516,54 +530,36 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   // (temperature for thermal, time stamps) in the same file.
   out.has_temp = poses.has_temp;
   out.has_time = poses.has_time;
+  // The controller's own routine on the table the firmware gets.
+  ki::CompensatedStream stream;
+  try {
+    stream = ki::compensate_rows(table, model, poses);
+  } catch (const ki::InputError& e) {
+    throw ki::InputError(model_path, 0, 0, e.message());
+  }
+  if (!stream.home_ok)
+    warn(model_path + ": warning: the home pose cannot be compensated; the stream starts from zero commands");
   std::size_t failed = 0;
-  std::visit(
-      [&](const auto& t) {
-        kincal::Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
-        if (compensator.status() != kincal::CompensationStatus::Ok)
-          throw ki::InputError(model_path, 0, 0,
-                               std::string("calibration table: ") + kincal::to_string(compensator.status()));
-        // A registered user joint effect's code (its numbers are in the table).
-        compensator.set_user_effect(model.effects.to_core(model.nominal).user_error);
-        // The stream starts with the machine at its home pose, approach
-        // directions +1, as the firmware does (docs/compensation.md).
-        kincal::Vec6<double> home = kincal::Vec6<double>::Zero();
-        if (compensator.home_command(home) != kincal::CompensationStatus::Ok)
-          warn(model_path + ": warning: the home pose cannot be compensated; the stream starts from zero commands");
-        auto state = compensator.start(home);
-        for (const ki::PoseRow& r : poses.rows) {
-          ki::PoseRow o;
-          o.id = r.id;
-          o.layer = r.layer;
-          o.role = r.role;
-          o.commanded = r.commanded;
-          o.temp = r.temp;
-          o.time = r.time;
-          kincal::NcPoint<double> point;
-          point.pose = kincal::Pose<double>::from_xyz_rpy(r.commanded);
-          if (r.temp) {
-            point.temperature = *r.temp;
-            point.has_temperature = true;
-          }
-          kincal::Vec6<double> dir;
-          if (r.dir && r.dir->size() >= 6) {
-            dir = r.dir->head<6>().cast<double>();
-            point.direction = &dir;
-          }
-          kincal::Vec6<double> q;
-          const kincal::CompensationStatus s = compensator.compensate(state, point, q);
-          o.status = kincal::to_string(s);
-          if (s == kincal::CompensationStatus::Ok) {
-            o.q = Eigen::VectorXd(q);
-          } else {
-            ++failed;
-            std::cerr << poses_path << ":" << r.line << ": warning: row '" << r.id << "': " << kincal::to_string(s)
-                      << "; written without joint commands\n";
-          }
-          out.rows.push_back(o);
-        }
-      },
-      table);
+  for (std::size_t k = 0; k < poses.rows.size(); ++k) {
+    const ki::PoseRow& r = poses.rows[k];
+    const ki::CompensatedRow& c = stream.rows[k];
+    ki::PoseRow o;
+    o.id = r.id;
+    o.layer = r.layer;
+    o.role = r.role;
+    o.commanded = r.commanded;
+    o.temp = r.temp;
+    o.time = r.time;
+    o.status = kincal::to_string(c.status);
+    if (c.status == kincal::CompensationStatus::Ok) {
+      o.q = Eigen::VectorXd(c.q);
+    } else {
+      ++failed;
+      warn(poses_path + ":" + std::to_string(r.line) + ": warning: row '" + r.id + "': " +
+           kincal::to_string(c.status) + "; written without joint commands");
+    }
+    out.rows.push_back(o);
+  }
   out.has_status = failed > 0;
   if (failed == poses.rows.size()) throw ki::InputError(poses_path, 0, 0, "no pose could be compensated");
   ki::write_pose_table_file(out, out_path, inputs);

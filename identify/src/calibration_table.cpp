@@ -17,9 +17,8 @@ namespace {
 template <class Machine>
 void finish(CalibrationTable<Machine>& t, const CalibrationModel& model, const CalibrationTableOptions& options) {
   t.effects = to_table(model.effects.to_core(model.nominal));
-  if (options.max_correction) {
-    for (int i = 0; i < 6; ++i) t.bounds.max_correction[i] = (*options.max_correction)(i);
-  }
+  const Vec6<double> bound = options.max_correction ? *options.max_correction : model.nominal.correction_bound();
+  for (int i = 0; i < 6; ++i) t.bounds.max_correction[i] = bound(i);
   t = seal_table(t);
   const MachineLimits<double> limits = machine_limits(model.nominal, options);
   const CompensationStatus st = validate_table(t, limits);
@@ -54,8 +53,8 @@ std::string above(const char* name, const double (&values)[N], double cap, const
 MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options) {
   const TableBounds<double> b = robot.is_hybrid() ? default_bounds(robot.hybrid()) : default_bounds(robot.stewart());
   MachineLimits<double> l = limits_from_bounds(b);
-  if (options.max_correction)
-    for (int i = 0; i < 6; ++i) l.max_correction[i] = (*options.max_correction)(i);
+  const Vec6<double> bound = options.max_correction ? *options.max_correction : robot.correction_bound();
+  for (int i = 0; i < 6; ++i) l.max_correction[i] = bound(i);
   return l;
 }
 
@@ -139,6 +138,80 @@ HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& 
 AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options) {
   if (model.nominal.is_hybrid()) return hybrid_calibration_table(model, options);
   return stewart_calibration_table(model, options);
+}
+
+CompensatedStream compensate_rows(const AnyCalibrationTable& table, const CalibrationModel& model,
+                                  const PoseTable& poses) {
+  CompensatedStream out;
+  out.rows.reserve(poses.rows.size());
+  std::visit(
+      [&](const auto& t) {
+        Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
+        if (compensator.status() != CompensationStatus::Ok)
+          throw InputError(std::string("calibration table: ") + to_string(compensator.status()));
+        // A registered user joint effect's code (its numbers are in the table).
+        compensator.set_user_effect(model.effects.to_core(model.nominal).user_error);
+        // The stream starts with the machine at its home pose, approach
+        // directions +1, as the firmware does (docs/compensation.md).
+        Vec6<double> home = Vec6<double>::Zero();
+        out.home_ok = compensator.home_command(home) == CompensationStatus::Ok;
+        auto state = compensator.start(home);
+        for (const PoseRow& r : poses.rows) {
+          NcPoint<double> point;
+          point.pose = Pose<double>::from_xyz_rpy(r.commanded);
+          if (r.temp) {
+            point.temperature = *r.temp;
+            point.has_temperature = true;
+          }
+          Vec6<double> dir;
+          if (r.dir && r.dir->size() >= 6) {
+            dir = r.dir->head<6>().cast<double>();
+            point.direction = &dir;
+          }
+          CompensatedRow row;
+          row.status = compensator.compensate(state, point, row.q);
+          if (row.status != CompensationStatus::Ok) row.q.setZero();
+          out.rows.push_back(row);
+        }
+      },
+      table);
+  return out;
+}
+
+CorrectionNeed correction_need(const CalibrationModel& model, const PoseTable& poses) {
+  CorrectionNeed need;
+  need.bound = model.nominal.correction_bound();
+  // The bound opened (the geometry caps still apply): how much the model
+  // needs, not whether it fits.
+  CalibrationTableOptions open;
+  open.max_correction = Vec6<double>::Constant(1e6);
+  try {
+    const CompensatedStream s = compensate_rows(calibration_table(model, open), model, poses);
+    for (std::size_t k = 0; k < poses.rows.size(); ++k) {
+      if (s.rows[k].status != CompensationStatus::Ok) continue;
+      Vec6<double> q_nominal;
+      if (model.nominal.inverse(Pose<double>::from_xyz_rpy(poses.rows[k].commanded), q_nominal) != Status::Ok) continue;
+      need.largest = need.largest.cwiseMax((s.rows[k].q - q_nominal).cwiseAbs());
+      ++need.poses;
+    }
+  } catch (const InputError& e) {
+    need.problem = e.message();
+  }
+  return need;
+}
+
+std::string correction_need_warning(const CorrectionNeed& need) {
+  if (!need.problem.empty()) return "the identified model cannot be made into a calibration table: " + need.problem;
+  if (!need.exceeds()) return {};
+  std::string joints;
+  for (int i = 0; i < 6; ++i)
+    if (need.largest(i) > need.bound(i))
+      joints += std::string(joints.empty() ? "" : ", ") + "q" + std::to_string(i + 1) + " " + number(need.largest(i)) +
+                " > " + number(need.bound(i));
+  return "the identified model needs corrections above the bound (largest |compensated - nominal| over " +
+         std::to_string(need.poses) + " poses: " + joints +
+         "); compensate and table will refuse those poses: raise the robot description's key 'max_correction' "
+         "(one number or one per joint, mm or rad)";
 }
 
 }  // namespace kincal::identify

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "json_locator.hpp"
+#include "kincal/core/compensation.hpp"
 #include "kincal/core/reference_machines.hpp"
 #include "kincal/identify/input_error.hpp"
 
@@ -67,6 +68,14 @@ Pose<double> Robot::home_pose() const {
   const HybridGeometry<double>& g = hybrid();
   const Vec3<double> ref_angles(0.0, hybrid_design_of(g).beta, 0.0);
   return hybrid_tool_pose(g, hybrid_frames(g, g.home, ref_angles));
+}
+
+Vec6<double> Robot::correction_bound() const {
+  if (max_correction) return *max_correction;
+  const TableBounds<double> b = is_stewart() ? default_bounds(stewart()) : default_bounds(hybrid());
+  Vec6<double> v;
+  for (int i = 0; i < 6; ++i) v(i) = b.max_correction[i];
+  return v;
 }
 
 Status Robot::inverse(const Pose<double>& pose, Vec6<double>& q) const {
@@ -216,6 +225,19 @@ class Reader {
     }
     return m;
   }
+  // One positive number for every joint, or one per joint.
+  Vec6<double> per_joint_positive(const json& j, const std::string& path) const {
+    Vec6<double> v;
+    if (j.is_number()) {
+      v.setConstant(positive(j, path));
+      return v;
+    }
+    if (!j.is_array()) fail(path, display(path) + " must be a number or an array of 6, not " + type_name(j));
+    v = vector<6>(j, path);
+    for (int i = 0; i < 6; ++i)
+      if (!(v(i) > 0)) fail(detail::child_path(path, std::size_t(i)), display(path) + " entries must be positive");
+    return v;
+  }
   // {"min": [...], "max": [...]} with min ≤ max elementwise.
   template <int N>
   void range(const json& j, const std::string& path, Eigen::Matrix<double, N, 1>& lo, Eigen::Matrix<double, N, 1>& hi) const {
@@ -239,7 +261,7 @@ const std::vector<std::string> kCommonRequired = {"format", "version", "family",
 Robot parse_stewart(const json& doc, const Reader& r) {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
-           {"length_offset", "screw_lead"});
+           {"length_offset", "screw_lead", "max_correction"});
   Robot robot;
   StewartGeometry<double> g;
   g.base = r.points<6>(doc["base_joints"], "/base_joints");
@@ -253,6 +275,7 @@ Robot parse_stewart(const json& doc, const Reader& r) {
                                       r.number(home["z"], "/home/z"), r.number(home["rx"], "/home/rx"),
                                       r.number(home["ry"], "/home/ry"), r.number(home["rz"], "/home/rz"));
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
+  if (doc.contains("max_correction")) robot.max_correction = r.per_joint_positive(doc["max_correction"], "/max_correction");
   robot.geometry = g;
   Vec6<double> q;
   // With the Jacobian: a geometry whose legs cannot hold the platform (six
@@ -271,7 +294,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "platform_to_wrist",
             "wrist_link", "tool_length", "beta", "reference_extension", "joint_limits", "extension_limits"},
-           {"joint_offset", "gauge_radius", "screw_lead"});
+           {"joint_offset", "gauge_radius", "screw_lead", "max_correction"});
   Robot robot;
   HybridDesign d;
   d.base_joints = r.points<3>(doc["base_joints"], "/base_joints");
@@ -294,6 +317,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
   robot.gauge_radius = doc.contains("gauge_radius") ? r.positive(doc["gauge_radius"], "/gauge_radius")
                                                     : HybridSeed000Dimensions::gauge_radius;
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
+  if (doc.contains("max_correction")) robot.max_correction = r.per_joint_positive(doc["max_correction"], "/max_correction");
   robot.geometry = make_hybrid_geometry(d);
   Vec6<double> q;
   // With the Jacobian: degenerate joint layouts (base or platform joints at
@@ -445,6 +469,13 @@ std::string robot_to_json(const Robot& robot) {
     j["gauge_radius"] = robot.gauge_radius;
   }
   j["screw_lead"] = robot.screw_lead;
+  if (robot.max_correction) {
+    const Vec6<double>& m = *robot.max_correction;
+    if ((m.array() == m(0)).all())
+      j["max_correction"] = m(0);
+    else
+      j["max_correction"] = vector_json<6>(m);
+  }
   std::string out;
   write_pretty(j, 0, out);
   return out + "\n";

@@ -13,18 +13,22 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <variant>
+#include <vector>
 
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/core/pose.hpp"
+#include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
 
 namespace kincal::identify {
 
 struct CalibrationTableOptions {
-  // Largest |command − nominal IK| per joint (mm, rad); default: core's
-  // default_bounds (5 mm prismatic, 0.02 rad revolute).
+  // Largest |command − nominal IK| per joint (mm, rad); default: the robot
+  // description's `max_correction`, else core's default_bounds (5 mm
+  // prismatic, 0.02 rad revolute).
   std::optional<Vec6<double>> max_correction;
 };
 
@@ -51,5 +55,37 @@ StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel
 HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& model,
                                                         const CalibrationTableOptions& options = {});
 AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options = {});
+
+// The controller's routine run over a pose file as the firmware runs an NC
+// stream: Compensator(table) from the home command (approach directions +1),
+// each row's pose with its temperature and approach directions where given.
+// One status and command per row (q valid where the status is Ok).
+struct CompensatedRow {
+  CompensationStatus status = CompensationStatus::Ok;
+  Vec6<double> q = Vec6<double>::Zero();
+};
+struct CompensatedStream {
+  bool home_ok = false;  // false: the home pose could not be compensated; the stream started from zero commands
+  std::vector<CompensatedRow> rows;
+};
+// Throws InputError if the table is refused by the Compensator (its status named).
+CompensatedStream compensate_rows(const AnyCalibrationTable& table, const CalibrationModel& model,
+                                  const PoseTable& poses);
+
+// What an identified model asks of the correction bound (issue #11 item 3):
+// per joint, the largest |compensated command − nominal IK| over the poses
+// (rows the compensation cannot serve for another reason, such as the stroke,
+// are left out), next to the bound the table would carry.
+struct CorrectionNeed {
+  Vec6<double> largest = Vec6<double>::Zero();
+  Vec6<double> bound = Vec6<double>::Zero();
+  std::size_t poses = 0;  // rows that entered `largest`
+  std::string problem;    // the table could not be built even with the bound open (why)
+  bool exceeds() const { return (largest.array() > bound.array()).any(); }
+};
+CorrectionNeed correction_need(const CalibrationModel& model, const PoseTable& poses);
+// "" when the need is within the bound; else one line naming the joints, by
+// how much, and the robot description key that raises the bound.
+std::string correction_need_warning(const CorrectionNeed& need);
 
 }  // namespace kincal::identify

@@ -4,6 +4,7 @@
 // (name, gauge size, screw lead).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -52,6 +53,11 @@ struct Robot {
   // HybridErrorModel, identify/hybrid_error_model.hpp), set from PARAMS.csv.
   // Empty = none; then the machine is the (possibly modified) ideal geometry.
   Eigen::VectorXd source_errors;
+  // The largest correction the controller may apply per joint (mm for
+  // prismatic, rad for revolute joints): the optional description key
+  // `max_correction`. Unset = core's default_bounds (5 mm, 0.02 rad). A
+  // machine before its first calibration may need more (issue #11 item 3).
+  std::optional<Vec6<double>> max_correction;
 
   bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
   bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }
@@ -66,6 +72,8 @@ struct Robot {
   // The pose the machine starts from (stewart: `home`; hybrid: the reference
   // pose, the origin of the workpiece frame with the tool aligned to it).
   Pose<double> home_pose() const;
+  // max_correction, or core's default_bounds where the description has none.
+  Vec6<double> correction_bound() const;
   // Nominal IK (commanded joints) for a pose, in the robot's pose frame.
   Status inverse(const Pose<double>& pose, Vec6<double>& q) const;
 };
