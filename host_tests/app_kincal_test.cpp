@@ -485,7 +485,7 @@ TEST(appKincal, IdentifyTheHybridWithRidgeOwnCoarseLayerAndAMisSeatedTarget) {
   ASSERT_TRUE(found);
   ki::write_pose_table_file(t, bad);
   const ToolRun r = run_tool("identify --robot hybrid-seed000 --data " + bad + " --out " + model + " --json " + summary +
-                             " --estimator ridge --coarse-layers 2 --exclude-outliers");
+                             " --estimator ridge --coarse-layers 2");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "coarse (Eq. (15)) on 49 nodes of layer(s) 2 (49 of them test rows")) << r.out;
   EXPECT_TRUE(contains(r.out, "node 'L3-34'")) << r.out;

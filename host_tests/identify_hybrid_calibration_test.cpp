@@ -369,7 +369,7 @@ TEST(identifyHybridCalibration, SequentialOutlierSearchFindsAMisSeatedTarget) {
     if (r.id == "L3-34") (*r.targets)(0, 0) += 0.050;
   const HybridCalibration flagged = calibrate_hybrid(nominal(), bad);
   ASSERT_FALSE(flagged.outliers.empty());
-  const HybridOutlierSearch search = hybrid_outlier_search(nominal(), bad);
+  const HybridOutlierSearch search = hybrid_outlier_search(nominal(), bad, flagged);
   ASSERT_EQ(search.removed.size(), 1u);
   EXPECT_EQ(search.removed.front().id, "L3-34");
   EXPECT_GT(search.removed.front().line, 0u);
@@ -381,11 +381,13 @@ TEST(identifyHybridCalibration, SequentialOutlierSearchFindsAMisSeatedTarget) {
               flagged.outlier_p_threshold);
   EXPECT_FALSE(search.systematic);
   // Clean data: nothing flagged, nothing set aside.
-  EXPECT_TRUE(calibrate_hybrid(nominal(), clean).outliers.empty());
-  EXPECT_TRUE(hybrid_outlier_search(nominal(), clean).removed.empty());
+  const HybridCalibration clean_fit = calibrate_hybrid(nominal(), clean);
+  EXPECT_TRUE(clean_fit.outliers.empty());
+  EXPECT_TRUE(hybrid_outlier_search(nominal(), clean, clean_fit).removed.empty());
   // Without noise the residual is the linearisation error, not noise: nodes
   // keep being flagged, and the search stops at a tenth of them, saying so.
-  const HybridOutlierSearch exact = hybrid_outlier_search(nominal(), measure(machine(11), 0.0, 111));
+  const PoseTable exact_data = measure(machine(11), 0.0, 111);
+  const HybridOutlierSearch exact = hybrid_outlier_search(nominal(), exact_data, calibrate_hybrid(nominal(), exact_data));
   EXPECT_TRUE(exact.systematic);
   EXPECT_EQ(exact.removed.size(), 9u);
 }

@@ -203,7 +203,7 @@ TEST(identifyStewartCalibration, Table4AsMeasuredDataFlagsRowA2) {
   const PoseTable t4 = read_pose_table(kExamples + "/seed001/table4_paper.csv");
   const StewartCalibration all = calibrate_stewart(nominal, t4);
   ASSERT_FALSE(all.outliers.empty());
-  const StewartOutlierSearch search = stewart_outlier_search(nominal, t4);
+  const StewartOutlierSearch search = stewart_outlier_search(nominal, t4, all);
   ASSERT_FALSE(search.removed.empty());
   EXPECT_EQ(search.removed.front().id, "A2");
   EXPECT_LT(search.removed.front().p_value, 1e-12);

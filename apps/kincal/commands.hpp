@@ -4,12 +4,14 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/outliers.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal_app {
@@ -35,6 +37,14 @@ kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& rob
 // the key that raises it.
 void warn_correction_need(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
 
+// The outlier screen (identify/outliers.hpp) as every command reports it:
+// the flagged nodes with file line and statistic, and what was done with
+// them; and its SUMMARY / DIAG.json fields.
+void print_outliers(const std::string& file, const kincal::identify::OutlierScreen& screen, std::size_t nodes,
+                    bool keep);
+void add_outliers_json(nlohmann::json& j, const kincal::identify::OutlierScreen& screen);
+void add_outliers_json(nlohmann::ordered_json& j, const kincal::identify::OutlierScreen& screen);
+
 struct DiagnoseArgs {
   std::string robot, data, json, report, effects;
   std::optional<double> noise_um;
@@ -56,6 +66,6 @@ int run_effects(const EffectsArgs& args);
 // (identify/effect_calibration.hpp).
 int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json,
-                              double effect_alpha, double ridge_k);
+                              double effect_alpha, double ridge_k, bool keep_outliers);
 
 }  // namespace kincal_app

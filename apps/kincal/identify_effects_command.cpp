@@ -18,7 +18,7 @@ namespace kincal_app {
 
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
-                              double effect_alpha, double ridge_k) {
+                              double effect_alpha, double ridge_k, bool keep_outliers) {
   const std::vector<std::string> names = effect_list(effects);
   const ki::PoseTable data = read_measurements(robot, data_path);
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
@@ -26,8 +26,34 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   opt.estimator = estimator;
   opt.ridge_k = ridge_k;
   opt.alpha = effect_alpha;
-  ki::EffectCalibrationReport report;
-  const ki::CalibrationModel model = ki::calibrate_with_effects(robot, data, names, opt, &report);
+  // Blunders: the same screen as plain identify (identify/outliers.hpp), on
+  // the joint design of base and effects; the flagged rows left out and the
+  // whole fit repeated without them, unless --keep-outliers.
+  struct Fit {
+    ki::CalibrationModel model;
+    ki::EffectCalibrationReport report;
+  };
+  const auto fit = [&](const ki::PoseTable& rows) {
+    Fit f;
+    f.model = ki::calibrate_with_effects(robot, rows, names, opt, &f.report);
+    f.model.data_file = data_path;
+    return f;
+  };
+  const Fit all = fit(data);
+  ki::SequentialOutlierOptions so;
+  so.min_nodes = robot.is_hybrid() ? 7 : 8;
+  ki::ScreenedFit<Fit> screened = ki::screen_and_refit(
+      data, all, [](const Fit& f) -> const ki::LinearProblem& { return f.report.final_problem; },
+      [](const Fit& f) -> const std::vector<ki::NodeTest>& { return f.report.nodes; }, fit, so);
+  ki::OutlierScreen& screen = screened.screen;
+  screen.excluded = ki::leave_out(screen, keep_outliers);
+  print_outliers(data_path, screen, all.report.nodes.size(), keep_outliers);
+  const Fit& used = screen.excluded ? screened.rest : all;
+  const ki::CalibrationModel& model = used.model;
+  const ki::EffectCalibrationReport& report = used.report;
+  if (screen.excluded)
+    std::cout << "  without them: cal residual RMS " << report.rms_cal_um_final << " um (all nodes: "
+              << all.report.rms_cal_um_final << " um)\n";
   warn_correction_need(model, data);
   for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
     std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
@@ -70,7 +96,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
                       {"free_parameters", h.free_parameters}});
     j["held_at_zero"] = held;
     j["residual_rms_um"] = {{"cal", report.rms_cal_um_final}, {"test", report.rms_test_um_final}};
-    j["outliers"] = nlohmann::ordered_json::array();
+    add_outliers_json(j, screen);
     outputs.add(json_path, j.dump(2) + "\n");
   }
   outputs.commit();

@@ -125,6 +125,43 @@ void kincal_app::warn_correction_need(const ki::CalibrationModel& model, const k
   if (!w.empty()) warn(data.file + ": warning: " + w);
 }
 
+void kincal_app::print_outliers(const std::string& file, const ki::OutlierScreen& screen, std::size_t nodes, bool keep) {
+  if (screen.flagged.empty()) {
+    std::cout << "  outliers: none (deleted-node F test, p < " << screen.p_threshold << ")\n";
+    return;
+  }
+  std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n"
+            << ki::describe_outliers(file, screen);
+  if (screen.systematic)
+    std::cout << "  still flagged after " << screen.flagged.size() << " of " << nodes
+              << " nodes were set aside: the misfit is systematic (an unmodelled effect, or data without noise), "
+                 "not a few bad nodes; no node is left out (kincal diagnose names the effect)\n";
+  else if (screen.excluded)
+    std::cout << "  the model is fitted without them (keep them with --keep-outliers)\n";
+  else if (keep)
+    std::cout << "  the model still uses every node (--keep-outliers)\n";
+}
+
+namespace {
+template <class Json> void outliers_fields(Json& j, const ki::OutlierScreen& screen) {
+  Json ids = Json::array(), tests = Json::array();
+  for (const ki::NodeTest& t : screen.flagged) {
+    ids.push_back(t.id);
+    tests.push_back({{"id", t.id}, {"line", t.line}, {"f", t.f}, {"p_value", t.p_value}});
+  }
+  j["outliers"] = ids;
+  j["outlier_tests"] = tests;
+  j["outliers_excluded"] = screen.excluded;
+  j["outliers_systematic"] = screen.systematic;
+  j["outlier_p_threshold"] = screen.p_threshold;
+}
+}  // namespace
+
+void kincal_app::add_outliers_json(nlohmann::json& j, const ki::OutlierScreen& screen) { outliers_fields(j, screen); }
+void kincal_app::add_outliers_json(nlohmann::ordered_json& j, const ki::OutlierScreen& screen) {
+  outliers_fields(j, screen);
+}
+
 namespace {
 
 constexpr int kExitError = 1;
@@ -208,7 +245,7 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
 
 struct IdentifyArgs {
   std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / liu (hybrid)
-  bool exclude_outliers = false;
+  bool keep_outliers = false;
   std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
   Eigen::Index pcr_components = 0;        // 0: by GCV
   std::vector<long long> coarse_layers;   // hybrid: the coarse stage's layers (default: the cal rows)
@@ -260,18 +297,6 @@ nlohmann::json node_tests_json(const std::vector<ki::NodeTest>& tests) {
   for (const ki::NodeTest& t : tests)
     out.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
   return out;
-}
-
-// The sequential outlier search's report: the nodes set aside, with their
-// file line and statistic, and what the rest gives.
-void print_outlier_search(const std::string& file, const std::vector<ki::NodeTest>& removed, bool excluded) {
-  std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n";
-  for (const ki::NodeTest& t : removed)
-    std::cout << "    " << file << ":" << t.line << ": node '" << t.id << "': F = " << t.f << ", p = " << t.p_value
-              << "\n";
-  std::cout << "  " << (excluded ? "the model uses the other nodes only (--exclude-outliers)"
-                                 : "the model still uses every node (exclude with --exclude-outliers)")
-            << "\n";
 }
 
 nlohmann::json stats_json(const ki::PoseErrorStats& s) {
@@ -341,23 +366,16 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   // whole families of source errors without effect on the gauge).
   const ki::IdentifiabilityHint hint = ki::hybrid_identifiability_hint(robot, c);
   if (!hint.text.empty()) std::cout << "  not identifiable from these poses; to separate them: " << hint.text << "\n";
-  // Nodes inconsistent with the others: deleted-node F test on the fine
-  // design, then the sequential search (set the worst aside, refit, repeat).
-  ki::HybridOutlierSearch search;
-  if (c.outliers.empty()) {
-    std::cout << "  outliers: none (deleted-node F test, p < " << c.outlier_p_threshold << ")\n";
-  } else {
-    search = ki::hybrid_outlier_search(robot, data, ho);
-    print_outlier_search(a.data, search.removed, a.exclude_outliers && !search.systematic);
-    if (search.systematic)
-      std::cout << "  still flagged after " << search.removed.size() << " of " << c.cal_nodes
-                << " nodes were set aside: the misfit is systematic (an unmodelled effect, or data without noise), "
-                   "not a few bad nodes; no node is excluded\n";
-  }
-  std::vector<std::string> outlier_ids;
-  for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
-  const bool excluded = a.exclude_outliers && !search.removed.empty() && !search.systematic;
-  const ki::HybridCalibration& used = excluded ? search.rest : c;
+  // Nodes inconsistent with the others (identify/outliers.hpp): the
+  // sequential search on the fine design; left out unless --keep-outliers.
+  const ki::HybridOutlierSearch search = ki::hybrid_outlier_search(robot, data, c, ho);
+  ki::OutlierScreen screen;
+  screen.flagged = search.removed;
+  screen.systematic = search.systematic;
+  screen.p_threshold = c.outlier_p_threshold;
+  screen.excluded = ki::leave_out(screen, a.keep_outliers);
+  kincal_app::print_outliers(a.data, screen, c.cal_nodes, a.keep_outliers);
+  const ki::HybridCalibration& used = screen.excluded ? search.rest : c;
   const ki::Estimate& est = *used.estimate(ho.estimator);
   std::cout << "  estimator " << describe_estimate(est, eo) << "; fit residual rms "
             << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows))) << " um per gauge coordinate\n";
@@ -389,11 +407,8 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["coarse_nodes"] = used.coarse_ids.size();
     j["coarse_layers"] = used.options.coarse_layers;
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
-    j["outliers"] = outlier_ids;
-    j["outliers_excluded"] = excluded;
-    j["outliers_systematic"] = search.systematic;
+    kincal_app::add_outliers_json(j, screen);
     j["node_tests"] = node_tests_json(c.node_tests);
-    j["outlier_p_threshold"] = c.outlier_p_threshold;
     outputs.add(a.json, summary_text(j, before, after));
   }
   outputs.commit();
@@ -416,7 +431,7 @@ int run_identify(const IdentifyArgs& a) {
     const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
     (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
-                                                 k);
+                                                 k, a.keep_outliers);
   }
   if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
@@ -438,24 +453,20 @@ int run_identify(const IdentifyArgs& a) {
                   h.step_norm);
     std::cout << line;
   }
-  ki::StewartOutlierSearch search;
-  if (c.outliers.empty()) {
-    std::cout << "  outliers: none (deleted-node F test, p < " << c.outlier_p_threshold << ")\n";
-  } else {
-    search = ki::stewart_outlier_search(robot, data, so);
-    std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n";
-    for (const ki::NodeTest& t : search.removed)
-      std::cout << "    " << a.data << ":" << t.line << ": node '" << t.id << "': F = " << t.f << ", p = " << t.p_value
-                << "\n";
-    std::cout << "  the other " << search.rest.nodes << " nodes alone fit to " << 1e3 * search.rest.history.back().rms_position_mm
-              << " um RMS (all nodes: " << 1e3 * c.history.back().rms_position_mm << " um); "
-              << (a.exclude_outliers ? "the model uses them only (--exclude-outliers)"
-                                     : "the model still uses every node (exclude with --exclude-outliers)")
-              << "\n";
-  }
-  std::vector<std::string> outlier_ids;
-  for (const ki::NodeTest& t : search.removed) outlier_ids.push_back(t.id);
-  const ki::StewartCalibration& used = a.exclude_outliers && !search.removed.empty() ? search.rest : c;
+  // Nodes inconsistent with the others (identify/outliers.hpp); left out
+  // unless --keep-outliers.
+  const ki::StewartOutlierSearch search = ki::stewart_outlier_search(robot, data, c, so);
+  ki::OutlierScreen screen;
+  screen.flagged = search.removed;
+  screen.systematic = search.systematic;
+  screen.p_threshold = c.outlier_p_threshold;
+  screen.excluded = ki::leave_out(screen, a.keep_outliers);
+  kincal_app::print_outliers(a.data, screen, c.nodes, a.keep_outliers);
+  if (screen.excluded)
+    std::cout << "  without them: " << search.rest.nodes << " nodes fit to "
+              << 1e3 * search.rest.history.back().rms_position_mm << " um RMS (all nodes: "
+              << 1e3 * c.history.back().rms_position_mm << " um)\n";
+  const ki::StewartCalibration& used = screen.excluded ? search.rest : c;
   const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
   kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
@@ -478,10 +489,8 @@ int run_identify(const IdentifyArgs& a) {
     j["condition_number"] = used.condition_number;
     j["sigma_um"] = 1e3 * used.sigma_mm;
     j["iterations"] = used.history.size();
-    j["outliers"] = outlier_ids;
-    j["outliers_excluded"] = a.exclude_outliers && !outlier_ids.empty();
+    kincal_app::add_outliers_json(j, screen);
     j["node_tests"] = node_tests_json(c.node_tests);
-    j["outlier_p_threshold"] = c.outlier_p_threshold;
     outputs.add(a.json, summary_text(j, before, after));
   }
   outputs.commit();
@@ -648,8 +657,9 @@ int run(int argc, char** argv) {
                        "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.05)")
       ->check(kincal_app::decimal(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
-  identify->add_flag("--exclude-outliers", ident.exclude_outliers,
-                     "fit without the nodes found inconsistent with the others (default: report them only)");
+  identify->add_flag("--keep-outliers", ident.keep_outliers,
+                     "fit every node, also those found inconsistent with the others (default: they are listed and "
+                     "left out, unless the misfit is systematic)");
 
   std::string comp_robot, comp_model, comp_poses, comp_out;
   CLI::App* compensate = app.add_subcommand("compensate", "turn requested poses into compensated joint commands");

@@ -236,6 +236,14 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   VectorXd y;
   stack(base, false, H, y);
   rep.rms_cal_um_final = rms_um(y);
+  rep.final_problem.H = joint_design(robot, list, held, base, H);
+  rep.final_problem.y = y;
+  for (const detail::NodeData& n : base.nodes) {
+    if (n.test) continue;
+    const PoseRow& row = data.rows[n.row];
+    for (Index k = 0; k < n.r.size(); ++k) rep.final_problem.row_node.push_back(Index(rep.nodes.size()));
+    rep.nodes.push_back({row.id, row.line, 0.0, 1.0, true, false});
+  }
   stack(base, true, H, y);
   rep.rms_test_um_final = rms_um(y);
   if (report != nullptr) *report = rep;

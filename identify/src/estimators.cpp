@@ -850,6 +850,37 @@ OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions
   return rep;
 }
 
+SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options) {
+  SequentialOutliers out;
+  LinearProblem rest = problem;
+  OutlierOptions o;
+  o.alpha = options.alpha;
+  Index limit = 0, nodes = 0;
+  for (;;) {
+    const OutlierReport rep = detect_outliers(rest, o);
+    if (out.removed.empty()) {
+      out.p_threshold = rep.p_threshold;
+      nodes = Index(rep.nodes.size());
+      limit = options.max_removed >= 0 ? options.max_removed
+                                       : std::max<Index>(1, Index(options.max_fraction * double(nodes)));
+    }
+    const NodeStatistic* worst = nullptr;
+    for (const NodeStatistic& st : rep.nodes)
+      if (st.outlying && (worst == nullptr || st.p_value < worst->p_value ||
+                          (st.p_value == worst->p_value && st.f > worst->f)))
+        worst = &st;
+    if (worst == nullptr) break;
+    if (Index(out.removed.size()) >= limit) {
+      out.systematic = true;
+      break;
+    }
+    if (nodes - Index(out.removed.size()) - 1 < options.min_nodes) break;
+    out.removed.push_back(*worst);
+    rest = without_nodes(rest, {worst->node});
+  }
+  return out;
+}
+
 const NodeTest* most_significant_outlier(const std::vector<NodeTest>& tests) {
   const NodeTest* worst = nullptr;
   for (const NodeTest& t : tests) {

@@ -3,6 +3,8 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 
+#include "kincal/identify/outliers.hpp"
+
 #include <Eigen/QR>
 #include <algorithm>
 #include <chrono>
@@ -355,28 +357,24 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   return out;
 }
 
-HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data,
+HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data, const HybridCalibration& all,
                                           const HybridCalibrationOptions& options) {
+  HybridOutlierSearch out;
+  if (!all.fine_done || all.node_tests.empty()) {
+    out.rest = all;
+    return out;
+  }
+  SequentialOutlierOptions so;
+  so.min_nodes = 7;
   HybridCalibrationOptions o = options;
   o.test_nodes = true;
-  HybridOutlierSearch out;
-  PoseTable rest = data;
-  out.rest = calibrate_hybrid(nominal, rest, o);
-  // A gross error is a few nodes; a misfit still flagged after a tenth of the
-  // nodes is set aside is systematic (an unmodelled effect, or data without
-  // noise, where the residual is the linearisation error): stop and say so.
-  const std::size_t limit = std::max<std::size_t>(1, out.rest.cal_nodes / 10);
-  while (!out.rest.outliers.empty()) {
-    if (out.removed.size() >= limit) {
-      out.systematic = true;
-      break;
-    }
-    const NodeTest* worst = most_significant_outlier(out.rest.node_tests);
-    out.removed.push_back(*worst);
-    const std::string id = worst->id;
-    rest.rows.erase(std::find_if(rest.rows.begin(), rest.rows.end(), [&](const PoseRow& row) { return row.id == id; }));
-    out.rest = calibrate_hybrid(nominal, rest, o);
-  }
+  ScreenedFit<HybridCalibration> s = screen_and_refit(
+      data, all, [](const HybridCalibration& c) -> const LinearProblem& { return c.fine_problem; },
+      [](const HybridCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
+      [&](const PoseTable& rest) { return calibrate_hybrid(nominal, rest, o); }, so);
+  out.removed = std::move(s.screen.flagged);
+  out.systematic = s.screen.systematic;
+  out.rest = std::move(s.rest);
   return out;
 }
 

@@ -1,5 +1,6 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
+#include "kincal/identify/outliers.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -248,21 +249,22 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     if (st.outlying) out.outliers.push_back(node.id);
   }
   out.outlier_p_threshold = outliers.p_threshold;
+  out.final_problem = std::move(last_problem);
   return out;
 }
 
 StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
-                                            const StewartCalibrationOptions& options) {
+                                            const StewartCalibration& all, const StewartCalibrationOptions& options) {
+  SequentialOutlierOptions so;
+  so.min_nodes = 8;
+  ScreenedFit<StewartCalibration> s = screen_and_refit(
+      data, all, [](const StewartCalibration& c) -> const LinearProblem& { return c.final_problem; },
+      [](const StewartCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
+      [&](const PoseTable& rest) { return calibrate_stewart(nominal, rest, options); }, so);
   StewartOutlierSearch out;
-  PoseTable rest = data;
-  out.rest = calibrate_stewart(nominal, rest, options);
-  while (!out.rest.outliers.empty() && out.rest.nodes > 8) {
-    const NodeTest* worst = most_significant_outlier(out.rest.node_tests);
-    out.removed.push_back(*worst);
-    const std::string id = worst->id;
-    rest.rows.erase(std::find_if(rest.rows.begin(), rest.rows.end(), [&](const PoseRow& r) { return r.id == id; }));
-    out.rest = calibrate_stewart(nominal, rest, options);
-  }
+  out.removed = std::move(s.screen.flagged);
+  out.systematic = s.screen.systematic;
+  out.rest = std::move(s.rest);
   return out;
 }
 

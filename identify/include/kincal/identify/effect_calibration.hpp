@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -49,6 +50,11 @@ struct EffectCalibrationReport {
   std::vector<double> rms_cal_um;  // cal residual RMS per pass (measurement coordinates)
   double rms_cal_um_final = 0, rms_test_um_final = 0;
   std::vector<HeldParameter> held;  // in the order they were held
+  // The joint design [H G] on the cal rows at the solution and its residual
+  // (row_node: node index), with each node's id and line: what the outlier
+  // screen (identify/outliers.hpp) tests.
+  LinearProblem final_problem;
+  std::vector<NodeTest> nodes;
 };
 
 // Throws InputError for an unknown effect name, an effect whose inputs the

@@ -344,6 +344,29 @@ struct NodeTest {
 // that underflow to 0, by the larger F), or null when none is outlying.
 const NodeTest* most_significant_outlier(const std::vector<NodeTest>& tests);
 
+// The sequential search (issue #11 item 5; one mechanism for identify,
+// identify --effects and diagnose: identify/outliers.hpp): test every node
+// on the model's linearised design at the solution, set the most significant
+// outlying one aside, test the rest again (the linear refit without it: no
+// nonlinear refit per node), until none is flagged. One gross error makes its
+// neighbours look suspicious too, so they are not all flagged at once. A
+// misfit still flagged after max_fraction of the nodes is set aside is
+// systematic (an unmodelled effect, or noise-free data where the residual is
+// rounding): the search stops and says so. It also stops before fewer than
+// min_nodes would remain.
+struct SequentialOutlierOptions {
+  double alpha = 0.01;
+  double max_fraction = 0.1;
+  Eigen::Index max_removed = -1;  // ≥ 0: this many at most (instead of max_fraction of the nodes)
+  Eigen::Index min_nodes = 0;
+};
+struct SequentialOutliers {
+  std::vector<NodeStatistic> removed;  // in the order found, each with its statistic at that step
+  bool systematic = false;
+  double p_threshold = 0;              // of the first test (α / testable nodes)
+};
+SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options = {});
+
 // The problem without the rows of `nodes` (node ids of row_node, or row
 // indices when row_node is empty). Weights and row_node are carried along.
 LinearProblem without_nodes(const LinearProblem& problem, const std::vector<Eigen::Index>& nodes);

@@ -134,21 +134,20 @@ struct HybridCalibration {
 HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
                                    const HybridCalibrationOptions& options = {});
 
-// Which cal nodes are inconsistent with the others, sequentially (as
-// stewart_outlier_search): the most significant outlier of calibrate_hybrid
-// is set aside, coarse + fine refitted without it and the rest tested again,
-// until no node is flagged. `removed` in the order found, each with its
-// statistic at that step; `rest` is the calibration without them. If nodes
-// are still flagged after a tenth of the cal nodes is set aside, the search
-// stops with `systematic`: the misfit is not a few bad nodes but the model
-// (an unmodelled effect) or noise-free data (the F test assumes noise), and
-// excluding nodes would hide it.
+// Which cal nodes are inconsistent with the others (identify/outliers.hpp:
+// the sequential search on the fine design, at least 7 nodes kept). `removed`
+// in the order found, each with its statistic at that step; `rest` is the
+// calibration (coarse + fine) refitted without them, or `all` itself when
+// none was flagged or the search stopped with `systematic`: nodes still
+// flagged after a tenth of the cal nodes was set aside, so the misfit is not
+// a few bad nodes but the model (an unmodelled effect) or noise-free data
+// (the F test assumes noise), and excluding nodes would hide it.
 struct HybridOutlierSearch {
   std::vector<NodeTest> removed;
   HybridCalibration rest;
   bool systematic = false;
 };
-HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data,
+HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data, const HybridCalibration& all,
                                           const HybridCalibrationOptions& options = {});
 
 // Eq. (16): $_t = B(requested)·Δχ̂, corrected = apply_twist(requested, −$_t),

@@ -69,6 +69,7 @@ struct StewartCalibration {
   std::vector<NodeTest> node_tests;   // per cal node, at the solution
   std::vector<std::string> outliers;  // ids of nodes inconsistent with the others (reported only)
   double outlier_p_threshold = 0;     // Bonferroni: α / testable nodes
+  LinearProblem final_problem;        // the design at the solution and its residuals (row_node: node index)
 };
 
 // Identifies θ from the table's `cal` rows (test rows are never used). Each row
@@ -80,18 +81,18 @@ struct StewartCalibration {
 StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data,
                                      const StewartCalibrationOptions& options = {});
 
-// Which nodes are inconsistent with the others: the most significant outlier
-// of calibrate_stewart is set aside, the rest refitted and tested again, until
-// no node is flagged (a sequential search: one gross error makes its
-// neighbours look suspicious too, so they are not all flagged at once).
+// Which nodes are inconsistent with the others (identify/outliers.hpp: the
+// sequential search on the design at the solution, at least 8 nodes kept).
 // `removed` in the order found (each with its test statistic at that step);
-// `rest` is the calibration of the remaining cal nodes. Stops when fewer than
-// 8 nodes would remain.
+// `rest` is the calibration refitted without them — or `all` itself when
+// none was flagged or the misfit is systematic.
 struct StewartOutlierSearch {
   std::vector<NodeTest> removed;
   StewartCalibration rest;
+  bool systematic = false;
 };
 StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
+                                            const StewartCalibration& all,
                                             const StewartCalibrationOptions& options = {});
 
 // Residuals of a (calibrated) 6-UPS against measured data, all rows: the

@@ -1,0 +1,77 @@
+// Measurement blunders (a mis-seated reflector, a mistyped row): one
+// mechanism for `identify`, `identify --effects` and `diagnose` (issue #11
+// item 5). Each fit hands over its linearised problem at the solution and the
+// id / line of each node; estimators.hpp's sequential_outliers tests every
+// node (deleted-node F test, Bonferroni over the nodes), sets the most
+// significant aside and tests the rest, until none is flagged or the misfit
+// proves systematic. Flagged rows are then left out and the model refitted
+// once, unless the user keeps them (--keep-outliers) or the misfit is
+// systematic (then excluding rows would hide a missing effect).
+#pragma once
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
+
+namespace kincal::identify {
+
+struct OutlierScreen {
+  std::vector<NodeTest> flagged;  // in the order found, each with its statistic at that step
+  bool systematic = false;        // still flagged after a tenth of the nodes was set aside
+  double p_threshold = 0;         // α / testable nodes, of the first test
+  bool excluded = false;          // the fit left the flagged rows out
+};
+
+// `nodes[k]`: id and line of the node numbered k in problem.row_node.
+OutlierScreen screen_outliers(const LinearProblem& problem, const std::vector<NodeTest>& nodes,
+                              const SequentialOutlierOptions& options = {});
+
+// The screen with refits: the sequential search runs about one solution, and
+// leaving a gross error out moves the solution, so the fit is repeated without
+// the flagged rows and screened again until no new row is flagged (at most 5
+// rounds). At most a tenth of the nodes (at least 2) may be flagged in all;
+// beyond that the misfit is systematic and `rest` is `all`.
+// problem_of(fit) / nodes_of(fit): the fit's linearised problem and node ids;
+// refit(table): the same fit on other rows.
+template <class Fit> struct ScreenedFit {
+  OutlierScreen screen;
+  Fit rest;
+};
+template <class Fit, class ProblemOf, class NodesOf, class Refit>
+ScreenedFit<Fit> screen_and_refit(const PoseTable& data, const Fit& all, ProblemOf problem_of, NodesOf nodes_of,
+                                  Refit refit, SequentialOutlierOptions options = {}) {
+  ScreenedFit<Fit> out{{}, all};
+  const Eigen::Index budget =
+      std::max<Eigen::Index>(2, Eigen::Index(options.max_fraction * double(nodes_of(all).size())));
+  for (int round = 0; round < 5; ++round) {
+    options.max_removed = budget - Eigen::Index(out.screen.flagged.size());
+    const OutlierScreen s = screen_outliers(problem_of(out.rest), nodes_of(out.rest), options);
+    if (round == 0) out.screen.p_threshold = s.p_threshold;
+    out.screen.flagged.insert(out.screen.flagged.end(), s.flagged.begin(), s.flagged.end());
+    if (s.systematic) {
+      out.screen.systematic = true;
+      out.rest = all;
+      break;
+    }
+    if (s.flagged.empty()) break;
+    out.rest = refit(without_rows(data, out.screen.flagged));
+  }
+  return out;
+}
+
+// The policy every command follows: leave the flagged rows out unless the
+// user keeps them or the misfit is systematic.
+inline bool leave_out(const OutlierScreen& screen, bool keep) {
+  return !keep && !screen.systematic && !screen.flagged.empty();
+}
+
+// `data` without the rows of `rows` (matched by line and id).
+PoseTable without_rows(const PoseTable& data, const std::vector<NodeTest>& rows);
+
+// One line per flagged node for a terminal: "FILE:LINE: node 'ID': F = …, p = …".
+std::string describe_outliers(const std::string& file, const OutlierScreen& screen);
+
+}  // namespace kincal::identify
