@@ -19,6 +19,7 @@
 
 #include "kincal/core/stewart.hpp"
 #include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/robot.hpp"
@@ -194,4 +195,44 @@ TEST(identifyBlunder, IdentifyWithEffectsUsesTheSameScreen) {
   EXPECT_LT(left_out_um, 1.1 * floor);
   // The identified scale is the truth within its noise either way.
   EXPECT_LT((left_out.effects.values.at("scale") - m.scale).lpNorm<Eigen::Infinity>(), 2e-5);
+}
+
+// diagnose: the same screen on the final model (base + accepted effects).
+// Scale on the legs and one 50 µm blunder among 100 cal rows, 40 held-out
+// rows measured too; the noise given (1 µm) and not given.
+TEST(identifyBlunder, DiagnoseLeavesTheBlunderOutAndExplainsTheData) {
+  const ki::Robot robot = ki::builtin_robot("stewart-seed001");
+  const Machine m = machine(robot, 13, true);
+  std::mt19937_64 rng(47);
+  std::vector<Vec6<double>> all_poses = poses(robot, 140, rng);
+  ki::PoseTable data = measure(robot, m, all_poses, 29);
+  for (std::size_t k = 100; k < data.rows.size(); ++k) data.rows[k].role = ki::Role::Test;
+  data.has_role = true;
+  for (const std::optional<double> noise : {std::optional<double>(1.0), std::optional<double>()}) {
+    ki::DiagnoseOptions o;
+    o.noise_um = noise;
+    const ki::Diagnosis d = ki::diagnose(robot, data, o);
+    ASSERT_EQ(d.outliers.flagged.size(), 1u) << (noise ? "given" : "estimated");
+    EXPECT_EQ(d.outliers.flagged.front().id, "r29");
+    EXPECT_TRUE(d.outliers.excluded);
+    EXPECT_EQ(d.rms.cal_nodes, 99u);
+    ASSERT_FALSE(d.accepted.empty());
+    EXPECT_EQ(d.accepted.front(), "scale");
+    EXPECT_EQ(d.verdict, "explained") << (noise ? "given" : "estimated") << ": final test RMS " << d.final_rms.test;
+    EXPECT_TRUE(d.hotspots.empty());
+    const std::string json = ki::diagnosis_to_json(d);
+    EXPECT_NE(json.find("\"outlier_tests\""), std::string::npos);
+    EXPECT_NE(json.find("\"r29\""), std::string::npos);
+    EXPECT_NE(ki::diagnosis_report_html(d).find("Outliers"), std::string::npos);
+  }
+  // --keep-outliers: listed, not left out.
+  ki::DiagnoseOptions keep;
+  keep.noise_um = 1.0;
+  keep.keep_outliers = true;
+  const ki::Diagnosis kept = ki::diagnose(robot, data, keep);
+  ASSERT_EQ(kept.outliers.flagged.size(), 1u);
+  EXPECT_FALSE(kept.outliers.excluded);
+  EXPECT_EQ(kept.rms.cal_nodes, 100u);
+  std::printf("diagnose with the blunder kept: verdict %s, final test RMS %.3f um\n", kept.verdict.c_str(),
+              kept.final_rms.test);
 }

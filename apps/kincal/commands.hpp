@@ -4,7 +4,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,17 +38,15 @@ void warn_correction_need(const kincal::identify::CalibrationModel& model, const
 
 // The outlier screen (identify/outliers.hpp) as every command reports it:
 // the flagged nodes with file line and statistic, and what was done with
-// them; and its SUMMARY / DIAG.json fields.
+// them (the JSON fields: identify::add_outlier_fields).
 void print_outliers(const std::string& file, const kincal::identify::OutlierScreen& screen, std::size_t nodes,
                     bool keep);
-void add_outliers_json(nlohmann::json& j, const kincal::identify::OutlierScreen& screen);
-void add_outliers_json(nlohmann::ordered_json& j, const kincal::identify::OutlierScreen& screen);
 
 struct DiagnoseArgs {
   std::string robot, data, json, report, effects;
   std::optional<double> noise_um;
   double alpha = 0.01;
-  bool quiet = false;
+  bool quiet = false, keep_outliers = false;
 };
 CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& args);
 int run_diagnose(const DiagnoseArgs& args);

@@ -31,6 +31,9 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
   d->add_option("--effects", a.effects, "candidate effects to test, comma separated (default: all registered)");
   d->add_option("--alpha", a.alpha, "family-wise significance level (Holm), default 0.01")
       ->check(decimal(0, 1, true));
+  d->add_flag("--keep-outliers", a.keep_outliers,
+              "diagnose with every cal node, also those inconsistent with the others (default: they are listed and "
+              "left out, unless the misfit is systematic)");
   d->add_flag("--quiet", a.quiet, "no progress lines on stderr");
   return d;
 }
@@ -65,6 +68,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   if (!(a.alpha > 0 && a.alpha < 1)) throw ki::InputError("--alpha must be in (0, 1)");
   opt.alpha = a.alpha;
   opt.progress = !a.quiet;
+  opt.keep_outliers = a.keep_outliers;
   if (!a.effects.empty()) opt.candidates = effect_list(a.effects);
 
   const ki::Diagnosis d = ki::diagnose(robot, data, opt);
@@ -74,6 +78,8 @@ int run_diagnose(const DiagnoseArgs& a) {
   outputs.commit();
 
   std::cout << "diagnose: " << a.data << ", robot " << robot.name << " (" << d.base_model << ")\n";
+  print_outliers(a.data, d.outliers, d.outliers.excluded ? d.rms.cal_nodes + d.outliers.flagged.size() : d.rms.cal_nodes,
+                 a.keep_outliers);
   std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << "); base model RMS cal " << um(d.rms.cal)
             << ", test " << um(d.rms.test) << "\n";
   for (const ki::EffectTest& t : d.ranking) {

@@ -96,7 +96,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
                       {"free_parameters", h.free_parameters}});
     j["held_at_zero"] = held;
     j["residual_rms_um"] = {{"cal", report.rms_cal_um_final}, {"test", report.rms_test_um_final}};
-    add_outliers_json(j, screen);
+    ki::add_outlier_fields(j, screen);
     outputs.add(json_path, j.dump(2) + "\n");
   }
   outputs.commit();

@@ -143,26 +143,6 @@ void kincal_app::print_outliers(const std::string& file, const ki::OutlierScreen
 }
 
 namespace {
-template <class Json> void outliers_fields(Json& j, const ki::OutlierScreen& screen) {
-  Json ids = Json::array(), tests = Json::array();
-  for (const ki::NodeTest& t : screen.flagged) {
-    ids.push_back(t.id);
-    tests.push_back({{"id", t.id}, {"line", t.line}, {"f", t.f}, {"p_value", t.p_value}});
-  }
-  j["outliers"] = ids;
-  j["outlier_tests"] = tests;
-  j["outliers_excluded"] = screen.excluded;
-  j["outliers_systematic"] = screen.systematic;
-  j["outlier_p_threshold"] = screen.p_threshold;
-}
-}  // namespace
-
-void kincal_app::add_outliers_json(nlohmann::json& j, const ki::OutlierScreen& screen) { outliers_fields(j, screen); }
-void kincal_app::add_outliers_json(nlohmann::ordered_json& j, const ki::OutlierScreen& screen) {
-  outliers_fields(j, screen);
-}
-
-namespace {
 
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
@@ -407,7 +387,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["coarse_nodes"] = used.coarse_ids.size();
     j["coarse_layers"] = used.options.coarse_layers;
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
-    kincal_app::add_outliers_json(j, screen);
+    ki::add_outlier_fields(j, screen);
     j["node_tests"] = node_tests_json(c.node_tests);
     outputs.add(a.json, summary_text(j, before, after));
   }
@@ -489,7 +469,7 @@ int run_identify(const IdentifyArgs& a) {
     j["condition_number"] = used.condition_number;
     j["sigma_um"] = 1e3 * used.sigma_mm;
     j["iterations"] = used.history.size();
-    kincal_app::add_outliers_json(j, screen);
+    ki::add_outlier_fields(j, screen);
     j["node_tests"] = node_tests_json(c.node_tests);
     outputs.add(a.json, summary_text(j, before, after));
   }

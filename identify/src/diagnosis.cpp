@@ -191,7 +191,10 @@ std::string joint_display_unit(const Robot& robot, int j) { return robot.is_hybr
 
 // ---- diagnose --------------------------------------------------------------------
 
-Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
+namespace {
+
+// One diagnosis on the rows given (diagnose() below adds the outlier screen).
+Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto progress = [&](const std::string& s) {
     if (options.progress) std::cerr << "diagnose: " << s << "\n";
@@ -732,6 +735,54 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
                             "the residual follows " + best_name + " linearly (" + fmt(best_group.rms_um) +
                                 " um RMS, p = " + fmt(best_p) + ")"});
   }
+  // The final model's cal design and residual for the outlier screen
+  // (columns scaled to unit norm: the hat matrix, hence the test, is the same).
+  {
+    MatrixXd X = design(cal, accepted);
+    for (Index j = 0; j < X.cols(); ++j)
+      if (X.col(j).norm() > 0) X.col(j) /= X.col(j).norm();
+    d.final_problem.H = std::move(X);
+    d.final_problem.y = current.r_cal;
+    for (std::size_t b = 0; b < cal.node.size(); ++b) {
+      const NodeData& n = base.nodes[cal.node[b]];
+      const PoseRow& row = data.rows[n.row];
+      for (Index k = 0; k < n.r.size(); ++k) d.final_problem.row_node.push_back(Index(b));
+      d.cal_nodes.push_back({row.id, row.line, 0.0, 1.0, true, false});
+    }
+  }
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return d;
+}
+
+}  // namespace
+
+Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const Diagnosis all = diagnose_rows(robot, data, options);
+  // Blunders (identify/outliers.hpp): the same screen as identify, on the
+  // final model (base + accepted effects) — a missing effect makes the
+  // misfit systematic and then nothing is left out.
+  SequentialOutlierOptions so;
+  so.min_nodes = Index(all.final_problem.H.cols()) / 6 + 2;
+  ScreenedFit<Diagnosis> s = screen_and_refit(
+      data, all, [](const Diagnosis& x) -> const LinearProblem& { return x.final_problem; },
+      [](const Diagnosis& x) -> const std::vector<NodeTest>& { return x.cal_nodes; },
+      [&](const PoseTable& rows) {
+        if (options.progress) std::cerr << "diagnose: again without the flagged nodes\n";
+        return diagnose_rows(robot, rows, options);
+      },
+      so);
+  s.screen.excluded = leave_out(s.screen, options.keep_outliers);
+  Diagnosis d = s.screen.excluded ? std::move(s.rest) : all;
+  d.outliers = s.screen;
+  d.data_file = data.file;
+  if (s.screen.excluded)
+    d.notes.push_back(std::to_string(s.screen.flagged.size()) +
+                      " cal node(s) inconsistent with the others were left out (see outliers; keep them with "
+                      "--keep-outliers)");
+  else if (s.screen.systematic)
+    d.notes.push_back("many cal nodes are inconsistent with the final model: the misfit is systematic, no node was "
+                      "left out");
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }
@@ -803,6 +854,7 @@ std::string diagnosis_to_json(const Diagnosis& d) {
   j["by_joint"] = groups_json(d.by_joint);
   j["by_region"] = groups_json(d.by_region);
   j["by_covariate"] = groups_json(d.by_covariate);
+  add_outlier_fields(j, d.outliers);
   j["notes"] = d.notes;
   j["seconds"] = d.seconds;
   return j.dump(2) + "\n";

@@ -3,6 +3,7 @@
 #include "kincal/identify/estimators.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -850,9 +851,37 @@ OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions
   return rep;
 }
 
+namespace {
+
+// The problem on a set of independent columns spanning the same space (the
+// hat matrix, hence every deleted-node test, depends on the span only): a
+// model whose effect is nearly collinear with the base (the hybrid's
+// compliance, 99.9 % confounded) is tested like any other.
+LinearProblem on_independent_columns(const LinearProblem& problem) {
+  MatrixXd scaled = problem.H;
+  for (Index j = 0; j < scaled.cols(); ++j)
+    if (scaled.col(j).norm() > 0) scaled.col(j) /= scaled.col(j).norm();
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(scaled);
+  qr.setThreshold(1e-10);  // as the diagnosis ranks its designs
+  const Index rank = qr.rank();
+  if (rank == problem.H.cols()) return problem;
+  LinearProblem out = problem;
+  out.H.resize(problem.H.rows(), rank);
+  out.names.clear();
+  for (Index k = 0; k < rank; ++k) {
+    const Index j = qr.colsPermutation().indices()(k);
+    out.H.col(k) = problem.H.col(j);
+    if (std::size_t(j) < problem.names.size()) out.names.push_back(problem.names[std::size_t(j)]);
+  }
+  if (out.names.size() != std::size_t(rank)) out.names.clear();
+  return out;
+}
+
+}  // namespace
+
 SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options) {
   SequentialOutliers out;
-  LinearProblem rest = problem;
+  LinearProblem rest = on_independent_columns(problem);
   OutlierOptions o;
   o.alpha = options.alpha;
   Index limit = 0, nodes = 0;

@@ -117,6 +117,17 @@ void write_header(std::ostringstream& h, const Diagnosis& d) {
   row("Data file", escape(d.data_file.empty() ? "—" : d.data_file));
   row("Family", escape(d.family.empty() ? "—" : d.family));
   row("Nodes", std::to_string(d.rms.cal_nodes) + " cal, " + std::to_string(d.rms.test_nodes) + " test (held out)");
+  if (!d.outliers.flagged.empty()) {
+    std::string list;
+    for (const NodeTest& t : d.outliers.flagged)
+      list += (list.empty() ? "" : "<br>") + escape(t.id) + " <span class=\"dim\">(line " + std::to_string(t.line) +
+              ", F = " + num(t.f, 3) + ", p = " + num(t.p_value, 2) + ")</span>";
+    row("Outliers", list + "<br>" +
+                        (d.outliers.excluded ? std::string("left out of the fit (keep them with --keep-outliers)")
+                         : d.outliers.systematic
+                             ? std::string("not left out: the misfit is systematic, not a few bad nodes")
+                             : std::string("kept (--keep-outliers)")));
+  }
   row("Noise σ", finite_positive(noise)
                      ? num(noise, 3) + " µm per coordinate <span class=\"dim\">(" +
                            escape(d.noise_source.empty() ? "source not given" : d.noise_source) + ")</span>"

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/outliers.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -25,6 +26,9 @@ struct DiagnoseOptions {
   double min_test_gain = 0.05;     // an effect must cut the held-out RMS by ≥ 5 % to be accepted
   std::vector<std::string> candidates;  // empty: every registered effect
   bool progress = false;                // progress lines on stderr
+  // Cal nodes the outlier screen flags (identify/outliers.hpp, on the final
+  // model) are left out and the diagnosis repeated without them, unless kept.
+  bool keep_outliers = false;
   // After each accepted effect, fit it with the base nonlinearly and test the
   // next candidates at that solution (false: one linear step from the base fit).
   bool relinearise = true;
@@ -104,6 +108,13 @@ struct Diagnosis {
   std::string base_model;            // what the base model is (e.g. "seed 001 42-parameter model")
   // Values of the accepted effects' parameters in the final fit, "scale:s1" → value.
   std::vector<std::pair<std::string, double>> accepted_parameters;
+  // Measurement blunders: cal nodes inconsistent with the final model
+  // (identify/outliers.hpp), with their statistics; left out unless kept.
+  OutlierScreen outliers;
+  // The final model's cal design (column-scaled) and residual at the
+  // solution, row_node numbering `cal_nodes`: what the screen tests.
+  LinearProblem final_problem;
+  std::vector<NodeTest> cal_nodes;
   double seconds = 0;
 };
 

@@ -71,6 +71,22 @@ inline bool leave_out(const OutlierScreen& screen, bool keep) {
 // `data` without the rows of `rows` (matched by line and id).
 PoseTable without_rows(const PoseTable& data, const std::vector<NodeTest>& rows);
 
+// The screen's fields in SUMMARY.json / DIAG.json (nlohmann::json or
+// ordered_json): outliers (ids), outlier_tests (id, line, F, p),
+// outliers_excluded, outliers_systematic, outlier_p_threshold.
+template <class Json> void add_outlier_fields(Json& j, const OutlierScreen& screen) {
+  Json ids = Json::array(), tests = Json::array();
+  for (const NodeTest& t : screen.flagged) {
+    ids.push_back(t.id);
+    tests.push_back({{"id", t.id}, {"line", t.line}, {"f", t.f}, {"p_value", t.p_value}});
+  }
+  j["outliers"] = ids;
+  j["outlier_tests"] = tests;
+  j["outliers_excluded"] = screen.excluded;
+  j["outliers_systematic"] = screen.systematic;
+  j["outlier_p_threshold"] = screen.p_threshold;
+}
+
 // One line per flagged node for a terminal: "FILE:LINE: node 'ID': F = …, p = …".
 std::string describe_outliers(const std::string& file, const OutlierScreen& screen);
 
