@@ -247,7 +247,7 @@ TEST(IdentifyReport, NumbersAreLocaleIndependent) {
   const Diagnosis d = synthetic(1, 3, false, false);
   const std::string html = diagnosis_report_html(d);
   std::setlocale(LC_ALL, old.c_str());
-  EXPECT_NE(html.find("5.00 µm per coordinate"), std::string::npos);
+  EXPECT_NE(html.find("5.00 µm per position coordinate"), std::string::npos);
 }
 
 }  // namespace

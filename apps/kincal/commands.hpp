@@ -44,7 +44,7 @@ void print_outliers(const std::string& file, const kincal::identify::OutlierScre
 
 struct DiagnoseArgs {
   std::string robot, data, json, report, effects;
-  std::optional<double> noise_um;
+  std::optional<double> noise_um, noise_urad;
   double alpha = 0.01;
   bool quiet = false, keep_outliers = false;
 };

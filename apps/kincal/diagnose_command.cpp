@@ -25,8 +25,12 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
   d->add_option("--json", a.json, "DIAG.json to write")->required();
   d->add_option("--report", a.report, "REPORT.html to write (self-contained, inline SVG)");
   d->add_option("--noise-um", a.noise_um,
-                "tracker uncertainty, sigma per measured coordinate in um (6-UPS: orientation counted at 200 mm); "
-                "default: from repeated nodes, else estimated")
+                "sigma of a measured position coordinate in um (pose x, y, z; gauge targets); default: from repeated "
+                "nodes, else estimated from neighbouring nodes")
+      ->check(decimal(0, HUGE_VAL, true));
+  d->add_option("--noise-urad", a.noise_urad,
+                "sigma of a measured orientation coordinate in urad (6-UPS pose rx, ry, rz); default: from repeated "
+                "nodes, else estimated from neighbouring nodes")
       ->check(decimal(0, HUGE_VAL, true));
   d->add_option("--effects", a.effects, "candidate effects to test, comma separated (default: all registered)");
   d->add_option("--alpha", a.alpha, "family-wise significance level (Holm), default 0.01")
@@ -65,6 +69,7 @@ int run_diagnose(const DiagnoseArgs& a) {
     if (!(*a.noise_um > 0) || !std::isfinite(*a.noise_um)) throw ki::InputError("--noise-um must be a number > 0");
     opt.noise_um = a.noise_um;
   }
+  opt.noise_urad = a.noise_urad;
   if (!(a.alpha > 0 && a.alpha < 1)) throw ki::InputError("--alpha must be in (0, 1)");
   opt.alpha = a.alpha;
   opt.progress = !a.quiet;
@@ -80,7 +85,10 @@ int run_diagnose(const DiagnoseArgs& a) {
   std::cout << "diagnose: " << a.data << ", robot " << robot.name << " (" << d.base_model << ")\n";
   print_outliers(a.data, d.outliers, d.outliers.excluded ? d.rms.cal_nodes + d.outliers.flagged.size() : d.rms.cal_nodes,
                  a.keep_outliers);
-  std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << "); base model RMS cal " << um(d.rms.cal)
+  std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << ")";
+  if (robot.is_stewart())
+    std::cout << ", orientation " << d.noise_urad << " urad (" << d.noise_urad_source << ")";
+  std::cout << "; base model RMS cal " << um(d.rms.cal)
             << ", test " << um(d.rms.test) << "\n";
   for (const ki::EffectTest& t : d.ranking) {
     std::cout << "  " << (t.accepted ? "+ " : "  ") << t.effect;

@@ -134,8 +134,14 @@ double chi2_upper_tail(double chi2, double dof) {
 
 // ---- noise ---------------------------------------------------------------------
 
-// Pooled within-group variance of repeated nodes (same commanded pose).
-std::optional<double> repeated_node_noise(const PoseTable& data, const BaseModel& base) {
+// Which residual coordinates of a node are of one kind: the 6-UPS's pose has
+// positions (0–2) and orientations (3–5, in mm at detail::kOrientationWeightMm); the
+// hybrid's gauge has positions only (all 9).
+bool in_kind(const NodeData& n, Index i, bool orientation) { return n.r.size() == 6 ? (i >= 3) == orientation : !orientation; }
+
+// Pooled within-group variance of repeated nodes (same commanded pose), over
+// one kind of coordinate; σ in the residual's units (mm).
+std::optional<double> repeated_node_noise(const PoseTable& data, const BaseModel& base, bool orientation) {
   std::map<std::vector<double>, std::vector<const NodeData*>> groups;
   for (const NodeData& n : base.nodes) {
     const Vec6<double>& c = data.rows[n.row].commanded;
@@ -148,11 +154,89 @@ std::optional<double> repeated_node_noise(const PoseTable& data, const BaseModel
     VectorXd mean = VectorXd::Zero(members.front()->r.size());
     for (const NodeData* m : members) mean += m->r;
     mean /= double(members.size());
-    for (const NodeData* m : members) ss += (m->r - mean).squaredNorm();
-    dof += double((members.size() - 1) * std::size_t(mean.size()));
+    for (Index i = 0; i < mean.size(); ++i) {
+      if (!in_kind(*members.front(), i, orientation)) continue;
+      for (const NodeData* m : members) ss += (m->r(i) - mean(i)) * (m->r(i) - mean(i));
+      dof += double(members.size() - 1);
+    }
   }
   if (dof < 10) return std::nullopt;
   return std::sqrt(ss / dof);
+}
+
+// Noise from differences between neighbouring cal nodes (issue #11 item 4):
+// not the fit's own residual level (circular: an unmodelled effect would
+// raise it and then look like noise), but half the mean square difference of
+// the base residuals of nodes next to each other — a smooth systematic
+// residual is nearly the same at neighbours and cancels. Two neighbourhoods:
+// motion order (consecutive cal rows: slow drifts such as temperature) and
+// the workspace (each node's nearest commanded pose, rotations at 200 mm);
+// the smaller estimate is used. Residuals of a least-squares fit carry
+// σ²(1 − h); the mean leverage p / n is divided out.
+struct NeighbourNoise {
+  double sigma = 0;  // residual units (mm)
+  std::string how;
+};
+std::optional<NeighbourNoise> neighbour_noise(const PoseTable& data, const BaseModel& base, bool orientation) {
+  std::vector<const NodeData*> cal;
+  Index rows = 0;
+  for (const NodeData& n : base.nodes)
+    if (!n.test) cal.push_back(&n), rows += n.r.size();
+  if (cal.size() < 12 || rows <= base.parameters) return std::nullopt;
+  const double leverage = 1.0 - double(base.parameters) / double(rows);
+  // Per pair: the squared difference over the kind's k coordinates, ~ 2σ²(1 − h)·χ²_k
+  // under noise. The median over the pairs (not the mean): a local error
+  // that shows at a few nodes (a bump in one joint's stroke) spoils only
+  // the pairs it touches.
+  int k = 0;
+  for (Index i = 0; i < cal.front()->r.size(); ++i) k += in_kind(*cal.front(), i, orientation) ? 1 : 0;
+  if (k == 0) return std::nullopt;
+  auto pair_d2 = [&](const NodeData& a, const NodeData& b) {
+    double ss = 0;
+    for (Index i = 0; i < a.r.size(); ++i)
+      if (in_kind(a, i, orientation)) ss += (a.r(i) - b.r(i)) * (a.r(i) - b.r(i));
+    return ss;
+  };
+  auto sigma_of = [&](std::vector<double> d2) {
+    std::nth_element(d2.begin(), d2.begin() + std::ptrdiff_t(d2.size() / 2), d2.end());
+    const double median = d2[d2.size() / 2];
+    // Median of χ²_k ≈ k (1 − 2 / (9k))³ (Wilson–Hilferty).
+    const double chi2_median = double(k) * std::pow(1.0 - 2.0 / (9.0 * double(k)), 3);
+    return std::sqrt(median / (2.0 * chi2_median * leverage));
+  };
+  std::vector<double> motion, space;
+  for (std::size_t m = 1; m < cal.size(); ++m) motion.push_back(pair_d2(*cal[m - 1], *cal[m]));
+  auto place = [&](const NodeData& n) {
+    Vec6<double> c = data.rows[n.row].commanded;
+    c.tail<3>() *= detail::kOrientationWeightMm;
+    return c;
+  };
+  for (std::size_t m = 0; m < cal.size(); ++m) {
+    const Vec6<double> cm = place(*cal[m]);
+    std::size_t best = m;
+    double best_d = HUGE_VAL;
+    for (std::size_t o = 0; o < cal.size(); ++o) {
+      if (o == m) continue;
+      const double dist = (place(*cal[o]) - cm).squaredNorm();
+      if (dist < best_d) best_d = dist, best = o;
+    }
+    if (best != m) space.push_back(pair_d2(*cal[m], *cal[best]));
+  }
+  const double in_motion = sigma_of(motion), in_space = sigma_of(space);
+  if (in_motion <= in_space) return NeighbourNoise{in_motion, "estimated from neighbouring nodes in motion order"};
+  return NeighbourNoise{in_space, "estimated from neighbouring nodes in the workspace"};
+}
+
+// Rows of one kind scaled by `factor` (residual, measurement map, design):
+// the 6-UPS's orientation rows brought to the position noise, so one σ holds
+// for every row of the stacked problem.
+void scale_orientation_rows(BaseModel& base, double factor) {
+  for (NodeData& n : base.nodes) {
+    if (n.r.size() != 6) continue;
+    n.r.tail(3) *= factor;
+    n.M.bottomRows(3) *= factor;
+    n.H.bottomRows(3) *= factor;
+  }
 }
 
 // ---- per-node pictures: tool-point and joint residuals ---------------------------
@@ -222,6 +306,51 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
   BaseModel base = detail::fit_base(robot, data, en, "ols", true);
   d.base_model = base.description;
 
+  // Noise (docs/diagnosis.md "How kincal knows the noise"): positions from
+  // --noise-um, else repeated nodes, else neighbouring nodes; a 6-UPS's
+  // orientations likewise from --noise-urad. The orientation rows are then
+  // scaled so that one σ (the position's) holds for every row.
+  auto estimate = [&](bool orientation, std::string& source) -> double {
+    if (const auto rep = repeated_node_noise(data, base, orientation)) {
+      source = "repeated nodes";
+      return *rep;
+    }
+    if (const auto nb = neighbour_noise(data, base, orientation)) {
+      source = nb->how;
+      return nb->sigma;
+    }
+    source = "unknown (too few nodes to estimate it)";
+    return 0.0;
+  };
+  if (options.noise_um) {
+    d.noise_um = *options.noise_um;
+    d.noise_source = "given";
+  } else {
+    d.noise_um = estimate(false, d.noise_source) * kMicro;
+  }
+  double orientation_factor = 1.0;
+  if (robot.is_stewart()) {
+    if (options.noise_urad) {
+      d.noise_urad = *options.noise_urad;
+      d.noise_urad_source = "given";
+    } else if (options.noise_um) {
+      // Only the position noise given: the rotation counted as the
+      // displacement it causes at 200 mm (one σ for all, as before).
+      d.noise_urad = *options.noise_um / detail::kOrientationWeightMm * 1e3;
+      d.noise_urad_source = "as the position noise at 200 mm (give --noise-urad if it differs)";
+    } else {
+      d.noise_urad = estimate(true, d.noise_urad_source) / detail::kOrientationWeightMm * 1e6;
+    }
+    if (d.noise_urad > 0 && d.noise_um > 0)
+      orientation_factor = (d.noise_um / kMicro) / (d.noise_urad * 1e-6 * detail::kOrientationWeightMm);
+    // Never more than 1000× either way: a near-zero estimate must not make
+    // one kind of row dominate.
+    orientation_factor = std::clamp(orientation_factor, 1e-3, 1e3);
+    scale_orientation_rows(base, orientation_factor);
+  } else if (options.noise_urad) {
+    d.notes.push_back("--noise-urad ignored: the hybrid's gauge measures positions only");
+  }
+
   // Stacks per role, from a base model's nodes (H, residual), and the
   // candidates' columns at its nodes.
   auto build_stacks = [](const BaseModel& b, Stack& cal_out, Stack& test_out) {
@@ -271,20 +400,10 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
                      "only " + std::to_string(cal.node.size()) + " usable cal nodes (" + std::to_string(n_cal) +
                          " equations) for " + std::to_string(base.parameters) + " base parameters");
 
-  // Noise.
   const FitResult base_fit = fit(cal, test, {});
   d.rms = base_fit.rms;
-  if (options.noise_um) {
-    d.noise_um = *options.noise_um;
-    d.noise_source = "given";
-  } else if (const auto rep = repeated_node_noise(data, base)) {
-    d.noise_um = *rep * kMicro;
-    d.noise_source = "repeated nodes";
-  } else {
-    d.noise_source = "estimated";  // set after the stepwise search, from the final cal residual
-  }
-  const bool noise_known = d.noise_source != "estimated";
   const double sigma_mm = d.noise_um / kMicro;
+  const bool noise_known = sigma_mm > 0;
 
   auto consistent_rms = [&](double rss, Index rank, double test_ss, Index test_n) {
     if (!noise_known || !(sigma_mm > 0)) return false;
@@ -398,6 +517,7 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
       const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
       BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
                                          en, "ols", true);
+      if (robot.is_stewart()) scale_orientation_rows(moved, orientation_factor);
       bool same_nodes = moved.nodes.size() == base.nodes.size();
       for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
         same_nodes = moved.nodes[k].row == base.nodes[k].row && moved.nodes[k].r.size() == base.nodes[k].r.size();
@@ -840,6 +960,8 @@ std::string diagnosis_to_json(const Diagnosis& d) {
     hot.push_back({{"kind", h.kind}, {"where", h.where}, {"share", h.share}, {"detail", h.detail}});
   j["hotspots"] = hot;
   j["noise_source"] = d.noise_source;
+  j["noise_urad"] = d.noise_urad;
+  j["noise_urad_source"] = d.noise_urad_source;
   j["robot"] = d.robot;
   j["data"] = d.data_file;
   j["base_model"] = d.base_model;

@@ -129,8 +129,11 @@ void write_header(std::ostringstream& h, const Diagnosis& d) {
                              : std::string("kept (--keep-outliers)")));
   }
   row("Noise σ", finite_positive(noise)
-                     ? num(noise, 3) + " µm per coordinate <span class=\"dim\">(" +
-                           escape(d.noise_source.empty() ? "source not given" : d.noise_source) + ")</span>"
+                     ? num(noise, 3) + " µm per position coordinate <span class=\"dim\">(" +
+                           escape(d.noise_source.empty() ? "source not given" : d.noise_source) + ")</span>" +
+                           (d.noise_urad > 0 ? "<br>" + num(d.noise_urad, 3) + " µrad per orientation coordinate " +
+                                                   "<span class=\"dim\">(" + escape(d.noise_urad_source) + ")</span>"
+                                             : std::string())
                      : std::string("unknown"));
   row("Base model RMS", "cal " + rms_with_ratio(d.rms.cal, noise) + " · test " +
                             (d.rms.test_nodes ? rms_with_ratio(d.rms.test, noise) : std::string("— (no test rows)")));

@@ -21,7 +21,8 @@
 namespace kincal::identify {
 
 struct DiagnoseOptions {
-  std::optional<double> noise_um;  // tracker uncertainty σ per coordinate (µm), if known
+  std::optional<double> noise_um;    // σ of a measured position coordinate (µm), if known
+  std::optional<double> noise_urad;  // σ of a measured orientation coordinate (µrad; 6-UPS pose), if known
   double alpha = 0.01;             // family-wise significance level (Holm)
   double min_test_gain = 0.05;     // an effect must cut the held-out RMS by ≥ 5 % to be accepted
   std::vector<std::string> candidates;  // empty: every registered effect
@@ -94,7 +95,9 @@ struct NodeResidual {
 struct Diagnosis {
   std::string robot, data_file, family;
   double noise_um = 0;
-  std::string noise_source;  // "given", "repeated nodes", "estimated"
+  std::string noise_source;  // "given", "repeated nodes", "estimated from neighbouring nodes in …"
+  double noise_urad = 0;     // 6-UPS: orientation σ (µrad); its rows are scaled to the position σ
+  std::string noise_urad_source;
   RoleRms rms;               // base model
   std::vector<ResidualGroup> by_layer, by_joint, by_region, by_covariate;
   std::vector<EffectTest> ranking;  // best first (first step's order), untestable at the end
