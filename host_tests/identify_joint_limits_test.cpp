@@ -12,12 +12,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/stewart.hpp"
+#include "kincal/core/compensation.hpp"
+#include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
@@ -236,4 +240,134 @@ TEST(identifyLargeErrors, SixUpsOfAnotherSizeConvergesFromMillimetreErrors) {
     }
     EXPECT_FALSE(undamped_ok) << "seed " << seed << ": the undamped iteration converges too; not a test of damping";
   }
+}
+
+// Issue #11 item 2, the hybrid: a machine before its first calibration —
+// encoder offsets of up to 3 mm / 5 mrad and all 144 structural errors of up
+// to 1 mm / 2 mrad (pose errors ~10 mm, ~9 mrad), drawn here — measured with
+// the gauge at random positions of the task cuboid (not seed 000's layers;
+// no layer column), 5 µm Gaussian noise drawn by the test, the machine
+// driven by HybridErrorModel::actual_fk directly (not simulate()). Seed
+// 000's single linear fine step with Liu's shrinkage stops far above the
+// noise; the re-linearised fine stage, with Liu rejected by its F check,
+// fits to the noise, and the core compensator (seed 000 Eq. (16), one step)
+// takes the held-out poses from ~10 mm to below a fifth of the single Liu
+// step's error. (Still above the floor of a machine whose errors are 100x
+// smaller: Eq. (16)'s one step; docs/identify.md.)
+namespace {
+
+struct HybridLargeCase {
+  ki::PoseTable cal, test;
+  Eigen::VectorXd errors;
+};
+
+HybridLargeCase hybrid_case(const ki::Robot& robot, double error_scale) {
+  const auto& g = robot.hybrid();
+  const ki::HybridErrorModel model(opened(g));
+  std::mt19937_64 rng(6061);
+  Eigen::VectorXd e(ki::HybridErrorModel::kParameterCount);
+  for (const auto& p : model.parameters()) {
+    const double bound = p.encoder() ? (p.angular() ? 5e-3 : 3.0) : (p.angular() ? 2e-3 : 1.0);
+    e(model.index_of(p.name)) = error_scale * std::uniform_real_distribution<double>(-bound, bound)(rng);
+  }
+  std::normal_distribution<double> noise(0.0, 0.005);
+  std::uniform_real_distribution<double> xy(-240, 240), z(-58, 58);
+  HybridLargeCase c;
+  c.errors = e;
+  for (ki::PoseTable* t : {&c.cal, &c.test}) {
+    t->file = "large-hybrid.csv";
+    t->has_targets = true;
+  }
+  for (int k = 0; c.cal.rows.size() + c.test.rows.size() < 130 && k < 10000; ++k) {
+    ki::PoseRow r;
+    r.id = "r" + std::to_string(k);
+    r.line = std::size_t(k + 2);
+    r.commanded << xy(rng), xy(rng), z(rng), 0, 0, 0;
+    Vec6<double> q;
+    kincal::HybridPassive<double> passive = g.home;
+    if (kincal::hybrid_ik(g, Pose<double>::from_xyz_rpy(r.commanded), q, nullptr, &passive) != Status::Ok) continue;
+    Pose<double> tool;
+    if (model.actual_fk(e, q, passive, tool).status != Status::Ok) continue;
+    Eigen::Matrix<double, 3, 3> t = ki::gauge_targets(g, robot.gauge_radius, tool);
+    for (int i = 0; i < 9; ++i) t.data()[i] += noise(rng);
+    r.targets = t;
+    const bool test = c.test.rows.size() < 40 && k % 3 == 2;
+    r.role = test ? ki::Role::Test : ki::Role::Cal;
+    (test ? c.test : c.cal).rows.push_back(r);
+  }
+  return c;
+}
+
+// RMS position error (mm) of the held-out poses on the erroneous machine,
+// commanded by core's compensator from the calibration's table.
+double held_out_compensated_rms(const ki::Robot& robot, const ki::HybridCalibration& c, const HybridLargeCase& data) {
+  const ki::CalibrationModel m = ki::hybrid_model(robot, c);
+  const kincal::HybridCalibrationTable<double> table = ki::hybrid_calibration_table(m);
+  const kincal::HybridCompensator<double> comp(table);
+  Vec6<double> home;
+  if (comp.home_command(home) != kincal::CompensationStatus::Ok) return 1e9;
+  auto state = comp.start(home);
+  const ki::HybridErrorModel model(opened(robot.hybrid()));
+  double sum = 0;
+  int n = 0;
+  for (const ki::PoseRow& r : data.test.rows) {
+    const Pose<double> wanted = Pose<double>::from_xyz_rpy(r.commanded);
+    Vec6<double> q;
+    if (comp.compensate(state, wanted, q) != kincal::CompensationStatus::Ok) return 1e9;
+    Pose<double> reached;
+    if (model.actual_fk(data.errors, q, robot.hybrid().home, reached).status != Status::Ok) return 1e9;
+    sum += (reached.p - wanted.p).squaredNorm();
+    ++n;
+  }
+  return std::sqrt(sum / n);
+}
+
+}  // namespace
+
+TEST(identifyLargeErrors, HybridConvergesFromMillimetreSourceErrors) {
+  const ki::Robot robot = ki::builtin_robot("hybrid-seed000");
+  const HybridLargeCase large = hybrid_case(robot, 1.0), small = hybrid_case(robot, 0.01);
+  ASSERT_EQ(large.cal.rows.size(), 90u);
+  ASSERT_EQ(large.test.rows.size(), 40u);
+
+  // Seed 000's one step with Liu kept whatever the data say (the code before).
+  ki::HybridCalibrationOptions one_step;
+  one_step.max_linearisations = 1;
+  one_step.liu_fallback = ki::HybridFineEstimator::None;
+  const ki::HybridCalibration before = ki::calibrate_hybrid(robot, large.cal, one_step);
+  const double rms_before = std::sqrt(before.liu.residual.squaredNorm() / double(before.liu.residual.size()));
+
+  const ki::HybridCalibration c = ki::calibrate_hybrid(robot, large.cal);
+  EXPECT_EQ(c.options.estimator, ki::HybridFineEstimator::Ridge) << "Liu's shrinkage is rejected (F " << c.liu_check_f
+                                                                  << ")";
+  EXPECT_LT(c.liu_check_p, 1e-6);
+  EXPECT_GE(c.linearisations.size(), 2u);
+  EXPECT_TRUE(c.fine_linearisation_valid);
+  const ki::Estimate& est = *c.estimate(c.options.estimator);
+  const double rms = std::sqrt(est.residual.squaredNorm() / double(est.residual.size()));
+  EXPECT_LT(rms, 1.1 * 0.005) << "fit at the noise (5 um per gauge coordinate)";
+  EXPECT_GT(rms_before, 2.0 * 0.005) << "seed 000's single Liu step stops above the noise";
+  // The model at the estimate is what the linearisation says it is.
+  EXPECT_LT(c.linearisations.back().rss, 1.05 * c.linearisations.back().rss_predicted);
+
+  // Small errors on the same design and noise draws: Liu's shrinkage is kept
+  // (the data do not reject it); that is the floor.
+  const ki::HybridCalibration floor_cal = ki::calibrate_hybrid(robot, small.cal);
+  EXPECT_EQ(floor_cal.options.estimator, ki::HybridFineEstimator::Liu);
+  const double floor = held_out_compensated_rms(robot, floor_cal, small);
+  const double after = held_out_compensated_rms(robot, c, large);
+  const double one = held_out_compensated_rms(robot, before, large);
+  std::printf("held-out compensated RMS: one Liu step %.2f um, re-linearised %.2f um, floor %.2f um\n", 1e3 * one,
+              1e3 * after, 1e3 * floor);
+  // Measured: one Liu step 72 um, re-linearised 11.3 um. The small-error
+  // machine on this random design compensates at 35 um with the same
+  // one-step Eq. (16): the fine stage models the twist at the pose the
+  // machine reaches, Eq. (16) evaluates it at the requested one, and the
+  // estimate's ill-conditioned combinations make the difference large. A
+  // fixed point on the twist brought both to 2.1 / 4.6 um on the host but
+  // broke the effect pipeline's models, which put it at the commanded pose
+  // (issue #14; docs/identify.md), so it is not in core yet.
+  EXPECT_LT(after, 0.015);
+  EXPECT_GT(one, 4.0 * after);
+  EXPECT_GT(floor, 0.0);
 }

@@ -314,9 +314,12 @@ std::vector<std::string> identify_inputs(const IdentifyArgs& a) {
 // the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
 // or PCR.
 int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
-  const std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
-  const ki::EstimatorOptions eo = estimator_options(a, estimator);
+  std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
+  ki::EstimatorOptions eo = estimator_options(a, estimator);
   ki::HybridCalibrationOptions ho;
+  // Liu by default, unless the data reject its shrinkage (then ridge, said
+  // below); an estimator asked for by name is kept.
+  if (!a.estimator.empty()) ho.liu_fallback = ki::HybridFineEstimator::None;
   ho.estimator = eo.kind == ki::EstimatorKind::Ols     ? ki::HybridFineEstimator::Ols
                  : eo.kind == ki::EstimatorKind::Ridge ? ki::HybridFineEstimator::Ridge
                  : eo.kind == ki::EstimatorKind::Pcr   ? ki::HybridFineEstimator::Pcr
@@ -327,6 +330,15 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (seed 000: coarse encoder offsets, then fine "
             << estimator << " on the identifiable source errors)\n";
   const ki::HybridCalibration c = ki::calibrate_hybrid(robot, data, ho);
+  const bool liu_rejected = c.options.estimator != ho.estimator;
+  if (liu_rejected) {
+    estimator = ki::to_string(c.options.estimator);
+    eo = estimator_options(a, estimator);
+    std::cout << "  liu rejected by the data: its shrinkage adds F = " << c.liu_check_f << " (p = " << c.liu_check_p
+              << ") to the OLS residual, so it removes the machine's errors, not noise; fine stage by " << estimator
+              << " (--estimator liu keeps liu)\n";
+  }
+  ho = c.options;  // the outlier refits keep the estimator chosen here
   std::cout << "  cal nodes " << c.cal_nodes << "\n  coarse (Eq. (15)) on " << c.coarse_ids.size() << " nodes";
   if (!c.options.coarse_layers.empty()) {
     std::cout << " of layer(s)";
@@ -342,6 +354,22 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
               << " um, relative change " << c.coarse_history[k].relative_change << "\n";
   std::cout << "  fine: " << c.kept.size() << " of 150 source errors identifiable (Sec. 4.1 reconstruction), rank "
             << c.rank << ", condition number " << c.condition_number << "\n";
+  if (c.linearisations.size() > 1) {
+    // Large source errors: seed 000's one linear step did not predict the
+    // model's residual at its estimate (hybrid_calibration.hpp).
+    std::cout << "  fine: linearised " << c.linearisations.size() << " times (one step left the residual "
+              << std::sqrt(c.linearisations.front().rss / std::max(c.linearisations.front().rss_predicted, 1e-300))
+              << "x the linear prediction; large source errors)"
+              << (c.fine_linearisation_valid ? "" : ", NOT converged: the result is where the iteration stopped")
+              << "\n";
+    for (std::size_t k = 0; k < c.linearisations.size(); ++k) {
+      const ki::HybridFineLinearisation& l = c.linearisations[k];
+      const double rows = 9.0 * double(c.cal_nodes);
+      std::cout << "    linearisation " << k + 1 << ": step " << l.step_fraction << ", residual rms "
+                << 1e3 * std::sqrt(l.rss / rows) << " um (predicted " << 1e3 * std::sqrt(l.rss_predicted / rows)
+                << " um)\n";
+    }
+  }
   // What would make the others identifiable (pure-translation layers leave
   // whole families of source errors without effect on the gauge).
   const ki::IdentifiabilityHint hint = ki::hybrid_identifiability_hint(robot, c);
@@ -349,14 +377,10 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   // Nodes inconsistent with the others (identify/outliers.hpp): the
   // sequential search on the fine design; left out unless --keep-outliers.
   const ki::HybridOutlierSearch search = ki::hybrid_outlier_search(robot, data, c, ho);
-  ki::OutlierScreen screen;
-  screen.flagged = search.removed;
-  screen.systematic = search.systematic;
-  screen.p_threshold = c.outlier_p_threshold;
-  screen.excluded = ki::leave_out(screen, a.keep_outliers);
+  const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
   kincal_app::print_outliers(a.data, screen, c.cal_nodes, a.keep_outliers);
   const ki::HybridCalibration& used = screen.excluded ? search.rest : c;
-  const ki::Estimate& est = *used.estimate(ho.estimator);
+  const ki::Estimate& est = *used.estimate(used.options.estimator);
   std::cout << "  estimator " << describe_estimate(est, eo) << "; fit residual rms "
             << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows))) << " um per gauge coordinate\n";
   const ki::HybridCompensation comp = used.compensation();
@@ -383,6 +407,9 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["dropped_hint"] = hint.text;
     j["condition_number"] = used.condition_number;
     j["liu_d"] = used.liu.liu_d;
+    j["liu_check"] = {{"f", c.liu_check_f}, {"p_value", c.liu_check_p}, {"rejected", liu_rejected}};
+    j["fine_linearisations"] = used.linearisations.size();
+    j["fine_linearisation_valid"] = used.fine_linearisation_valid;
     j["coarse_iterations"] = used.coarse_history.size();
     j["coarse_nodes"] = used.coarse_ids.size();
     j["coarse_layers"] = used.options.coarse_layers;
@@ -436,11 +463,7 @@ int run_identify(const IdentifyArgs& a) {
   // Nodes inconsistent with the others (identify/outliers.hpp); left out
   // unless --keep-outliers.
   const ki::StewartOutlierSearch search = ki::stewart_outlier_search(robot, data, c, so);
-  ki::OutlierScreen screen;
-  screen.flagged = search.removed;
-  screen.systematic = search.systematic;
-  screen.p_threshold = c.outlier_p_threshold;
-  screen.excluded = ki::leave_out(screen, a.keep_outliers);
+  const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
   kincal_app::print_outliers(a.data, screen, c.nodes, a.keep_outliers);
   if (screen.excluded)
     std::cout << "  without them: " << search.rest.nodes << " nodes fit to "

@@ -63,6 +63,11 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
                                    : estimator == "ols" || finish ? HybridFineEstimator::Ols
                                                                   : HybridFineEstimator::Liu;
   HybridCalibrationOptions opt;
+  // Seed 000's single fine step and its estimates as they are: the fit below
+  // finishes it by its own Gauss–Newton steps (OLS or ridge), which the
+  // fine stage's re-linearisation along Liu's path would only move away from.
+  opt.max_linearisations = 1;
+  opt.liu_fallback = HybridFineEstimator::None;
   const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
   // Start from seed 000's coarse + fine estimate and finish the fit by
   // Gauss–Newton steps on the same identifiable columns: the fine stage is
@@ -125,12 +130,14 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   HybridCompensation previous = comp;
   const int max_steps = finish || ridge ? 6 : 0;
   if (max_steps == 0) evaluate(base);
+  std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
   for (; steps < max_steps; ++steps) {
     evaluate(base);
     const VectorXd away = values_of(comp) - reference;
     double objective = penalty * away.squaredNorm();
     for (const NodeData& n : base.nodes) objective += n.test ? 0.0 : n.r.squaredNorm();
-    if (objective > previous_objective) {  // a step that does not lower the objective is undone
+    if (steps == 0) modelled = base.nodes.size();
+    if (objective > previous_objective || base.nodes.size() < modelled) {  // a step that does not lower the objective is undone
       comp = previous;
       evaluate(base);
       break;

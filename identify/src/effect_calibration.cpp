@@ -72,7 +72,7 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   stack(base, false, H, y);
   const MatrixXd X = joint_design(robot, list, held, base, H);
   const Index free = X.cols() - H.cols();
-  if (free == 0) return std::nullopt;
+  if (free == 0 || X.rows() == 0) return std::nullopt;
   VectorXd scale(X.cols());
   for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
   const Eigen::JacobiSVD<MatrixXd> svd(X * scale.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);

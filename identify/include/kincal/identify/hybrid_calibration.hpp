@@ -64,6 +64,32 @@ struct HybridCalibrationOptions {
   std::vector<long long> coarse_layers;
   // Deleted-node F test of each cal node on the fine design (node_tests, outliers).
   bool test_nodes = true;
+  // The fine stage is linearised again at its estimate while the model's
+  // residual there exceeds the linearisation's prediction by more than this
+  // fraction (in RSS): source errors of millimetres, where one step of seed
+  // 000's linear fine stage stops far above the noise. 0.25: what the
+  // linearisation misses is then at least half the noise (in RMS); seed
+  // 000's own data sets stay at one step (their gap is ~5 %, and the
+  // compensation, Eq. (16) at the requested pose, matches that step's
+  // model). At most max_linearisations linearisations in all (1: seed 000's
+  // single step).
+  double relinearise_tolerance = 0.25;
+  int max_linearisations = 20;
+  // With estimator Liu: when the data reject Liu's shrinkage (the F test of
+  // what it adds to the OLS residual at level liu_alpha; hybrid_calibration.cpp),
+  // the fine stage uses this estimator instead and says so
+  // (HybridCalibration::liu_check_*; options.estimator then names it).
+  // None: keep Liu whatever the data say (an explicit --estimator liu).
+  HybridFineEstimator liu_fallback = HybridFineEstimator::Ridge;
+  double liu_alpha = 0.01;
+};
+
+// One linearisation of the fine stage (the first is seed 000's step from the
+// coarse machine).
+struct HybridFineLinearisation {
+  double step_fraction = 1;  // of the estimator's step from the previous point (halved when it failed)
+  double rss_predicted = 0;  // the linearised problem's residual sum of squares at its estimate, mm²
+  double rss = 0;            // the model's residual sum of squares at the point reached, mm²
 };
 
 struct HybridCoarseIteration {
@@ -103,9 +129,18 @@ struct HybridCalibration {
   bool fine_done = false;
   std::vector<Eigen::Index> kept, dropped;  // Δχ indices (encoders first)
   std::vector<std::string> kept_names, dropped_names;
+  // Linearisations of the fine stage (one when seed 000's single step holds),
+  // and whether the last one predicts the model's residual at the estimate.
+  std::vector<HybridFineLinearisation> linearisations;
+  bool fine_linearisation_valid = true;
+  // The check of Liu's shrinkage (options.liu_fallback): F and its p-value;
+  // options.estimator is the fallback when p < options.liu_alpha.
+  double liu_check_f = 0, liu_check_p = 1;
   Eigen::Index rank = 0;
   double condition_number = 0;   // column-scaled reconstructed H
-  LinearProblem fine_problem;    // H (kept columns, divided by column_scale) and y (gauge residuals)
+  // H (kept columns, divided by column_scale) and y (gauge residuals, plus
+  // H·(χ − χ_coarse) of the last linearisation point when re-linearised)
+  LinearProblem fine_problem;
   std::vector<Eigen::Matrix<double, 6, 1>> fine_poses;  // per cal node, the pose H was linearised at (x..rz)
   Eigen::VectorXd column_scale;  // D (ones unless scale_columns)
   Estimate liu, ols, ridge, pcr;     // all four from one SVD of fine_problem (x already divided by column_scale)

@@ -68,6 +68,18 @@ inline bool leave_out(const OutlierScreen& screen, bool keep) {
   return !keep && !screen.systematic && !screen.flagged.empty();
 }
 
+// A family's search result (StewartOutlierSearch, HybridOutlierSearch:
+// `removed`, `systematic`) as the screen the commands report, with the
+// policy applied.
+template <class Search> OutlierScreen screen_of(const Search& search, double p_threshold, bool keep) {
+  OutlierScreen s;
+  s.flagged = search.removed;
+  s.systematic = search.systematic;
+  s.p_threshold = p_threshold;
+  s.excluded = leave_out(s, keep);
+  return s;
+}
+
 // `data` without the rows of `rows` (matched by line and id).
 PoseTable without_rows(const PoseTable& data, const std::vector<NodeTest>& rows);
 
