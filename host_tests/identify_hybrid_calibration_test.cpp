@@ -302,7 +302,13 @@ TEST(identifyHybridCalibration, EachFineEstimatorCompensatesTheMachine) {
   EXPECT_LT(test_layer["pcr"].max_position, 0.005);
   EXPECT_LT(test_layer["ridge"].max_position, test_layer["ols"].max_position);
   EXPECT_LT(test_layer["pcr"].max_position, test_layer["ols"].max_position);
-  EXPECT_LT(test_layer["liu"].max_position, test_layer["ols"].max_position);
+  // Liu no longer beats OLS here: the compensation now inverts the model's
+  // twist (a fixed point, not Eq. (16)'s one step), so OLS's large
+  // ill-conditioned values cost it nothing on the test layer (measured max
+  // 4.9 um OLS, 6.4 um Liu; before, Liu was the better). Liu's case is its
+  // robustness η (MonteCarlo tests).
+  EXPECT_LT(test_layer["liu"].max_position, 0.0075);
+  EXPECT_LT(test_layer["ols"].max_position, 0.0075);
 }
 
 TEST(identifyHybridCalibration, ModelRecordsTheSelectedEstimator) {

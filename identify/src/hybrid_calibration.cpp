@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 
+#include "kincal/core/compensation.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -550,11 +551,20 @@ Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& reques
   Pose<double> corrected = requested;
   if (c.structural.size() > 0 && c.structural.lpNorm<Eigen::Infinity>() > 0) {
     if (!c.model || c.structural.size() != c.model->size()) return Status::InvalidInput;
+    // Eq. (16): $_t = B(requested)·Δχ̂ removed from the requested pose, then
+    // the fixed point p = apply_twist(requested, −B(p)·Δχ̂) of the model's
+    // twist at the pose the ideal machine reaches: the same iterates and
+    // stop rule as core's Compensator (compensation.hpp prepare()).
     Eigen::MatrixXd B;
-    const Status st = c.model->error_jacobian(requested, B);
-    if (st != Status::Ok) return st;
-    const Twist<double> t = B * c.structural;  // Eq. (16): $_t = B·Δχ̂
-    corrected = apply_twist(requested, Twist<double>(-t));
+    Twist<double> previous = Twist<double>::Zero();
+    for (int k = 0; k < kHybridTwistIterations; ++k) {
+      const Status st = c.model->error_jacobian(corrected, B);
+      if (st != Status::Ok) return st;
+      const Twist<double> t = B * c.structural;
+      corrected = apply_twist(requested, Twist<double>(-t));
+      if (k > 0 && (t - previous).lpNorm<Eigen::Infinity>() <= TwistIterationTolerance<double>::value) break;
+      previous = t;
+    }
   }
   Vec6<double> out;
   const Status st = hybrid_ik(c.controller_geometry(), corrected, out);
@@ -750,7 +760,9 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
       continue;
     }
     if (structural) {
-      if (compensation->model->error_jacobian(commanded, B) != Status::Ok) {
+      // The model's twist at the pose the ideal machine reaches (as the fine
+      // stage and the compensation's fixed point put it).
+      if (compensation->model->error_jacobian(predicted, B) != Status::Ok) {
         ++skipped;
         continue;
       }

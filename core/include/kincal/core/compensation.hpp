@@ -106,6 +106,21 @@ template <> struct StillTolerance<float> {
 
 // |RᵀR − I| allowed in an NC pose: rounding of a rotation built in the
 // scalar (a matrix ×1.001 is not a rotation and is refused).
+// The hybrid's error-twist fixed point (prepare()) stops when an iterate
+// changes the twist by at most this (mm, rad): 10 nm / 10 nrad in double, far
+// below a tracker's noise; in float about the rounding of a 1 m pose.
+template <class Scalar> struct TwistIterationTolerance;
+template <> struct TwistIterationTolerance<double> {
+  static constexpr double value = 1e-5;
+};
+template <> struct TwistIterationTolerance<float> {
+  static constexpr float value = 2e-4f;
+};
+// At most this many evaluations of the error twist per NC point (Eq. (16) is
+// the first). The contraction factor is ~|∂$_t/∂p| (~1e-2 for twists of
+// 10 mm over the task cuboid), so three leave ~1e-4 of the first iterate's error.
+inline constexpr int kHybridTwistIterations = 3;
+
 template <class Scalar> struct RotationTolerance;
 template <> struct RotationTolerance<double> {
   static constexpr double value = 1e-9;
@@ -402,14 +417,42 @@ template <class Machine> class Compensator {
       if (model_.structural) {
         // seed 000 Eq. (16): the predicted error twist at the nominal
         // configuration, removed from the requested pose before the ideal IK.
-        Twist<Scalar> t;
-        s = hybrid_error_twist(model_.nominal, model_.reference, f, w, model_.source_errors, t);
-        if (s != Status::Ok) return to_compensation_status(s);
-        // apply_twist(target, −$_t), its rotation by a libm-free series.
-        Mat3<Scalar> dR;
-        if (!small_rotation(Vec3<Scalar>(-t.template tail<3>()), dR)) return CS::OversizedCorrection;
-        target.p -= t.template head<3>();
-        target.R = dR * target.R;
+        // The identified model puts the twist at the pose p the ideal machine
+        // (encoder offsets in its geometry) reaches, reached = apply_twist(p,
+        // $_t(p)), so the pose to command is the fixed point
+        // p = apply_twist(target, −$_t(p)); Eq. (16) is its first iterate,
+        // from p = target. Each further iterate shrinks the error by the
+        // relative change of $_t over the twist's displacement
+        // (docs/compensation.md). Frames, wrenches and twist are re-evaluated
+        // in the same locals: the loop adds no stack.
+        const Pose<Scalar> base = target;
+        Twist<Scalar> previous = Twist<Scalar>::Zero();
+        Scalar previous_change = Scalar(0);
+        for (int k = 0; k < kHybridTwistIterations; ++k) {
+          if (k > 0) {
+            s = hybrid_frames_at_pose(model_.nominal, target, f, angles);
+            if (s == Status::Ok) s = hybrid_wrenches(model_.nominal, f, w);
+            if (s != Status::Ok) return to_compensation_status(s);
+          }
+          Twist<Scalar> t;
+          s = hybrid_error_twist(model_.nominal, model_.reference, f, w, model_.source_errors, t);
+          if (s != Status::Ok) return to_compensation_status(s);
+          // apply_twist(base, −$_t), its rotation by a libm-free series.
+          Mat3<Scalar> dR;
+          if (!small_rotation(Vec3<Scalar>(-t.template tail<3>()), dR)) return CS::OversizedCorrection;
+          target.p = base.p - t.template head<3>();
+          target.R = dR * base.R;
+          if (k > 0) {
+            const Scalar change = (t - previous).cwiseAbs().maxCoeff();
+            if (change <= TwistIterationTolerance<Scalar>::value) break;
+            // A contraction shrinks the change every iterate; one that grows
+            // (above rounding) is a model the fixed point does not hold for.
+            if (k > 1 && change > previous_change && change > Scalar(10) * TwistIterationTolerance<Scalar>::value)
+              return CS::NotConverged;
+            previous_change = change;
+          }
+          previous = t;
+        }
       }
       return CS::Ok;
     }

@@ -19,7 +19,7 @@ enum class CompensationStatus : std::uint8_t {
   Unreachable,          // no assembly reaches the (corrected) pose
   Singular,             // singular configuration at the NC point
   OutOfLimits,          // a joint command outside the stroke / angle limits
-  NotConverged,         // (kept for Status parity; not produced by the compensator)
+  NotConverged,         // hybrid: the error-twist fixed point diverged (compensation.hpp prepare())
   OversizedCorrection,  // |command − nominal IK| above the table's bound for a joint
   TableVersion,         // parameter table of another format version
   TableFamily,          // parameter table of another machine family
