@@ -485,16 +485,13 @@ TEST(IdentifyWithEffects, ComplianceAndScaleTogetherFitLikeComplianceAlone) {
   const ki::CalibrationModel both = ki::calibrate_with_effects(m.nominal, data, {"compliance", "scale"}, {}, &together);
   std::printf("  hybrid compliance data: held-out %.2f um with compliance, %.2f um with compliance + scale\n",
               alone.rms_test_um_final, together.rms_test_um_final);
-  // Known limit (docs/diagnosis.md): since the base model puts the
-  // structural twist at the pose the machine reaches (with the joint
-  // effects), the [H G] step's effect columns lack the twist's change with
-  // the joints, which the hybrid's large ill-conditioned base values make
-  // visible; the alternation then keeps three scale parameters and ends at
-  // 9.75 µm held-out against 5.24 with compliance alone. (It was 5.23 / 5.23
-  // with the twist at the commanded pose; but that model, compensated by the
-  // fixed point, left the clean data at 15.6 µm instead of 2.24.) Held here:
-  // no worse than twice the one effect.
-  EXPECT_LT(together.rms_test_um_final, 2.0 * alone.rms_test_um_final);
+  // The base model puts the hybrid's structural twist at the pose the joints
+  // reach, so the effect columns carry its change with the joints
+  // (NodeData::joint_map); without that term the alternation kept three
+  // scale parameters and ended at 9.75 µm. Measured: 5.24 µm alone, 5.58 µm
+  // together (five scale parameters stay free, the fit barely moves: the
+  // scale is 98 % confounded with the base).
+  EXPECT_LT(together.rms_test_um_final, 1.1 * alone.rms_test_um_final);
   const Eigen::VectorXd& k = both.effects.values.at("compliance");
   EXPECT_NEAR(k(1), -0.3, 0.1);
 }

@@ -95,8 +95,10 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     }
     return v;
   };
-  MatrixXd B(6, HybridErrorModel::kParameterCount);
-  auto evaluate = [&](BaseModel& base) {
+  MatrixXd B(6, HybridErrorModel::kParameterCount), Bd(6, HybridErrorModel::kParameterCount);
+  // with_joint_map: also ∂$_t/∂p per node by central differences of B(p)·Δη
+  // (NodeData::joint_map), for the effect columns at the solution.
+  auto evaluate = [&](BaseModel& base, bool with_joint_map = false) {
     base.nodes.clear();
     const HybridGeometry<double> gc = without_limits(comp.controller_geometry());
     for (std::size_t k = 0; k < data.rows.size(); ++k) {
@@ -116,6 +118,22 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
       // a compensation that evaluate it at different points disagree by
       // micrometres (clean hybrid data: 15.6 µm compensated; 2.24 µm here).
       if (comp.model->error_jacobian(predicted, B) != Status::Ok) continue;
+      Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
+      if (with_joint_map) {
+        bool ok = true;
+        for (int i = 0; i < 6 && ok; ++i) {
+          const double h = i < 3 ? 1e-3 : 1e-6;  // mm, rad: B·Δη is smooth on this scale
+          Twist<double> d = Twist<double>::Zero();
+          d(i) = h;
+          Twist<double> plus, minus;
+          ok = comp.model->error_jacobian(apply_twist(predicted, d), Bd) == Status::Ok;
+          if (ok) plus = Bd * comp.structural;
+          ok = ok && comp.model->error_jacobian(apply_twist(predicted, Twist<double>(-d)), Bd) == Status::Ok;
+          if (ok) minus = Bd * comp.structural;
+          if (ok) joint_map.col(i) += (plus - minus) / (2 * h);
+        }
+        if (!ok) joint_map.setIdentity();
+      }
       predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
       const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
       NodeData n;
@@ -127,6 +145,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
       n.H.resize(9, p);
       for (Index j = 0; j < p; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
       n.effect = *en[k];
+      n.joint_map = joint_map;
       base.nodes.push_back(std::move(n));
     }
   };
@@ -136,7 +155,6 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   double previous_objective = std::numeric_limits<double>::infinity();
   HybridCompensation previous = comp;
   const int max_steps = finish || ridge ? 6 : 0;
-  if (max_steps == 0) evaluate(base);
   std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
   for (; steps < max_steps; ++steps) {
     evaluate(base);
@@ -145,8 +163,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     for (const NodeData& n : base.nodes) objective += n.test ? 0.0 : n.r.squaredNorm();
     if (steps == 0) modelled = base.nodes.size();
     if (objective > previous_objective || base.nodes.size() < modelled) {  // a step that does not lower the objective is undone
-      comp = previous;
-      evaluate(base);
+      comp = previous;  // evaluated after the loop
       break;
     }
     previous_objective = objective;
@@ -182,7 +199,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
         comp.structural(idx) += delta(j);
     }
   }
-  if (steps == max_steps && max_steps > 0) evaluate(base);
+  evaluate(base, true);  // at the solution, with the joint maps the effect columns need
   base.description = "seed 000 coarse + fine model, " + std::to_string(p) + " identifiable of " +
                      std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
                      (ridge    ? "ridge (k = " + std::to_string(penalty) + ") finished by " + std::to_string(steps) +
@@ -248,7 +265,7 @@ MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseMode
   for (const NodeData& n : base.nodes) {
     if (n.test != test) continue;
     effect.twist_columns(robot, frame, n.effect, twist);
-    G.middleRows(r, n.r.size()) = n.M * twist;
+    G.middleRows(r, n.r.size()) = effect.acts_on_joints() ? MatrixXd(n.M * n.joint_map * twist) : MatrixXd(n.M * twist);
     r += n.r.size();
   }
   // A parameter whose input is (numerically) zero on this machine — e.g. the

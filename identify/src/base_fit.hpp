@@ -30,6 +30,11 @@ struct NodeData {
   Eigen::MatrixXd M;  // measurement map: Δy = M·twist
   Eigen::MatrixXd H;  // base design rows at the solution
   EffectNode effect;  // effect inputs at the node (commands as sent)
+  // The model's tool twist per tool twist of a joint-space effect: identity
+  // for the 6-UPS; for the hybrid I + ∂$_t/∂p, because its structural twist
+  // $_t = B(p)·Δη is evaluated at the pose p the joints reach and so moves
+  // with them (large where the estimate's ill-conditioned combinations are).
+  Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
 };
 
 struct BaseModel {

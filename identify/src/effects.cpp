@@ -133,6 +133,7 @@ class CyclicEffect final : public JointEffect {
 class ThermalEffect final : public Effect {
  public:
   std::string name() const override { return "thermal"; }
+  bool acts_on_joints() const override { return false; }
   std::string description() const override {
     return "uniform thermal expansion of structure and actuators, lengths x (1 + c (T - 20 C))";
   }

@@ -557,13 +557,20 @@ Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& reques
     // stop rule as core's Compensator (compensation.hpp prepare()).
     Eigen::MatrixXd B;
     Twist<double> previous = Twist<double>::Zero();
+    double previous_change = 0;
     for (int k = 0; k < kHybridTwistIterations; ++k) {
       const Status st = c.model->error_jacobian(corrected, B);
       if (st != Status::Ok) return st;
       const Twist<double> t = B * c.structural;
       corrected = apply_twist(requested, Twist<double>(-t));
-      if (k > 0 && (t - previous).lpNorm<Eigen::Infinity>() <= TwistIterationTolerance<double>::value) break;
+      const double change = (k == 0 ? t : Twist<double>(t - previous)).lpNorm<Eigen::Infinity>();
+      if (k > 0) {
+        const TwistStep step = twist_iteration_step(change, previous_change, k);
+        if (step == TwistStep::Done) break;
+        if (step == TwistStep::Diverged) return Status::NotConverged;
+      }
       previous = t;
+      previous_change = change;
     }
   }
   Vec6<double> out;

@@ -121,6 +121,21 @@ template <> struct TwistIterationTolerance<float> {
 // 10 mm over the task cuboid), so three leave ~1e-4 of the first iterate's error.
 inline constexpr int kHybridTwistIterations = 3;
 
+// One step of that fixed point judged: `change` is |$_t(p_k) − $_t(p_{k−1})|∞,
+// `previous` the change before it (for k = 1, |$_t(p_0)|∞: the displacement
+// that caused it). Done when the change is below the tolerance, or when the
+// next one, contracted by the ratio just seen, would be (so a model whose
+// twist hardly varies stops after two evaluations); Diverged when a later
+// change grows above rounding (the fixed point does not hold for the model).
+enum class TwistStep : std::uint8_t { Continue, Done, Diverged };
+template <class Scalar> constexpr TwistStep twist_iteration_step(Scalar change, Scalar previous, int k) {
+  const Scalar tol = TwistIterationTolerance<Scalar>::value;
+  if (change <= tol) return TwistStep::Done;
+  if (k > 1 && change > previous && change > Scalar(10) * tol) return TwistStep::Diverged;
+  if (previous > Scalar(0) && change * (change / previous) <= tol) return TwistStep::Done;
+  return TwistStep::Continue;
+}
+
 template <class Scalar> struct RotationTolerance;
 template <> struct RotationTolerance<double> {
   static constexpr double value = 1e-9;
@@ -442,16 +457,14 @@ template <class Machine> class Compensator {
           if (!small_rotation(Vec3<Scalar>(-t.template tail<3>()), dR)) return CS::OversizedCorrection;
           target.p = base.p - t.template head<3>();
           target.R = dR * base.R;
+          const Scalar change = (k == 0 ? t : Twist<Scalar>(t - previous)).cwiseAbs().maxCoeff();
           if (k > 0) {
-            const Scalar change = (t - previous).cwiseAbs().maxCoeff();
-            if (change <= TwistIterationTolerance<Scalar>::value) break;
-            // A contraction shrinks the change every iterate; one that grows
-            // (above rounding) is a model the fixed point does not hold for.
-            if (k > 1 && change > previous_change && change > Scalar(10) * TwistIterationTolerance<Scalar>::value)
-              return CS::NotConverged;
-            previous_change = change;
+            const TwistStep step = twist_iteration_step(change, previous_change, k);
+            if (step == TwistStep::Done) break;
+            if (step == TwistStep::Diverged) return CS::NotConverged;
           }
           previous = t;
+          previous_change = change;
         }
       }
       return CS::Ok;

@@ -44,6 +44,11 @@ class Effect {
   // `kincal effects` (docs/formats.md names them). Most effects need only the
   // commanded pose (and the joint commands derived from it).
   virtual std::string inputs() const { return "the commanded pose (x..rz)"; }
+  // Whether the effect acts through the joints (the machine's joints differ
+  // from the commands: scale, backlash, compliance, cyclic, a user joint
+  // effect) rather than on the measured pose (thermal). The hybrid's
+  // structural twist moves with the joints, not with the measurement.
+  virtual bool acts_on_joints() const { return true; }
   // Tool twist per unit parameter at one node: 6 × parameter_names().size().
   virtual void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
                              Eigen::Ref<Eigen::MatrixXd> columns) const = 0;
