@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Sets everything up and runs every test: host (Release), host under
 # AddressSanitizer + UndefinedBehaviorSanitizer, every reader under libFuzzer
-# for a bounded time (about a minute in all; fuzz/run.sh runs them longer), and
+# for a bounded time (about a minute in all; fuzz/run.sh runs them longer) --
+# the last two from one clang build, build/sanitize, so that identify/ is
+# compiled with the sanitizers once -- and
 # the firmware core checks under qemu for the Cortex-M7 (double FPU) and the
 # Cortex-M4F (float).
 # Usage: scripts/test-all.sh [host|sanitize|fuzz|m7|m4f ...]   (default: all five)
@@ -37,19 +39,24 @@ host_tool() {
     || { tail -50 build/host.tool.log; return 1; }
 }
 
+# The sanitizer build: clang, AddressSanitizer + UndefinedBehaviorSanitizer at
+# -O1 with assertions on (Debug), and libFuzzer's instrumentation so that the
+# fuzz stage's targets come from the same objects (top-level CMakeLists.txt).
+sanitizer_build=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+                 -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_FUZZERS=ON -DKINCAL_BUILD_BENCHMARKS=OFF)
+
 mkdir -p build
 for stage in "${stages[@]}"; do
   case $stage in
     host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
-    sanitize) run_stage sanitize -DCMAKE_BUILD_TYPE=Debug -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_BENCHMARKS=OFF ;;
-    fuzz)     echo "=== fuzz: configure"
-              cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang \
-                    -DCMAKE_CXX_COMPILER=clang++ -DKINCAL_BUILD_FUZZERS=ON -DKINCAL_BUILD_TESTS=OFF \
-                    -DKINCAL_BUILD_BENCHMARKS=OFF > build/fuzz.configure.log 2>&1 || { cat build/fuzz.configure.log; exit 1; }
+    sanitize) run_stage sanitize "${sanitizer_build[@]}" ;;
+    fuzz)     echo "=== fuzz: configure (build/sanitize, shared with the sanitize stage)"
+              cmake -S . -B build/sanitize -G Ninja "${sanitizer_build[@]}" > build/sanitize.configure.log 2>&1 \
+                || { cat build/sanitize.configure.log; exit 1; }
               echo "=== fuzz: build"
-              cmake --build build/fuzz -j "$jobs" --target kincal_fuzzers
+              cmake --build build/sanitize -j "$jobs" --target kincal_fuzzers
               echo "=== fuzz: run (8 s per target)"
-              fuzz/run.sh build/fuzz 8 ;;
+              fuzz/run.sh build/sanitize 8 ;;
     m7)       host_tool
               run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
     m4f)      host_tool
