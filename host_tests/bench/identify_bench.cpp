@@ -156,6 +156,48 @@ void BM_StewartCalibration(benchmark::State& state) {
   state.counters["iterations"] = double(iterations);
 }
 
+// Random poses over seed 001's working box (x, y in ±35 mm, z 180–220 mm,
+// tilts ±5°, yaw ±8°), all calibration: a design of any size, for the
+// identification's scaling (docs/benchmarks.md, issue #13).
+ki::PoseTable random_stewart_poses(int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  ki::PoseTable t;
+  t.file = "random-poses";
+  t.has_role = true;
+  for (int i = 0; i < count; ++i) {
+    ki::PoseRow r;
+    r.id = std::to_string(i + 1);
+    r.line = std::size_t(i + 2);
+    r.role = ki::Role::Cal;
+    r.commanded << 35 * u(rng), 35 * u(rng), 200 + 20 * u(rng), 5 * kDeg * u(rng), 5 * kDeg * u(rng), 8 * kDeg * u(rng);
+    t.rows.push_back(r);
+  }
+  return t;
+}
+
+// What `kincal identify` does on a 6-UPS data set: seed 001's iterative
+// calibration, then the sequential outlier screen (and a refit when it sets a
+// node aside). Arg: nodes. Seed 001's Table 3 errors, 1 µm / 5 µrad noise.
+void BM_IdentifyStewart(benchmark::State& state) {
+  static const ki::Robot nominal = ki::builtin_robot("stewart-seed001");
+  const ki::PoseTable data =
+      simulated(nominal, ki::apply_parameters(nominal, ki::read_parameters(kExamples + "/seed001/errors.csv", nominal)),
+                random_stewart_poses(int(state.range(0)), 17), 0.001, 5e-6, {}, 23);
+  std::size_t iterations = 0, removed = 0;
+  for (auto _ : state) {
+    const ki::StewartCalibration c = ki::calibrate_stewart(nominal, data);
+    const ki::StewartOutlierSearch s = ki::stewart_outlier_search(nominal, data, c, {});
+    iterations = c.history.size();
+    removed = s.removed.size();
+    benchmark::DoNotOptimize(s.rest.history.data());
+  }
+  state.counters["nodes"] = double(data.rows.size());
+  state.counters["iterations"] = double(iterations);
+  state.counters["removed"] = double(removed);
+}
+
 // One diagnosis, every registered candidate effect, on the example's
 // diagnosis poses measured on a machine with a hidden thermal effect (the
 // main job's data): 100 poses on the 6-UPS, 3 layers on the hybrid.
@@ -219,6 +261,7 @@ BENCHMARK(BM_HybridMonteCarlo10k)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PrepareHybridFineDesign)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_HybridFineRun)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_StewartCalibration)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IdentifyStewart)->Arg(108)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DiagnoseStewart)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DiagnoseHybrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_IdentifyHybridWithScale)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);

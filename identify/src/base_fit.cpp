@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
@@ -95,7 +96,22 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     }
     return v;
   };
-  MatrixXd B(6, HybridErrorModel::kParameterCount), Bd(6, HybridErrorModel::kParameterCount);
+  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  // The structural twist $_t = B(p)·Δη alone, at any pose, by core's
+  // evaluation (the compensator's: hybrid_error_twist.hpp, the same model
+  // as B to rounding) — a few thousand operations where a full 6 × 150 B
+  // costs a hundred times more; the joint map below needs twelve of them per
+  // node. Δη has zeros at the encoder entries, so the twist is structural only.
+  const HybridErrorReference<double> twist_reference =
+      hybrid_error_reference(comp.nominal, HybridErrorModelOptions().up_split);
+  auto structural_twist = [&](const Pose<double>& pose, Twist<double>& t) {
+    HybridFrames<double> f;
+    HybridWrenches<double> w;
+    Vec3<double> angles;
+    return hybrid_frames_at_pose(comp.nominal, pose, f, angles) == Status::Ok &&
+           hybrid_wrenches(comp.nominal, f, w) == Status::Ok &&
+           hybrid_error_twist(comp.nominal, twist_reference, f, w, comp.structural.data(), t) == Status::Ok;
+  };
   // with_joint_map: also ∂$_t/∂p per node by central differences of B(p)·Δη
   // (NodeData::joint_map), for the effect columns at the solution.
   auto evaluate = [&](BaseModel& base, bool with_joint_map = false) {
@@ -126,10 +142,8 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
           Twist<double> d = Twist<double>::Zero();
           d(i) = h;
           Twist<double> plus, minus;
-          ok = comp.model->error_jacobian(apply_twist(predicted, d), Bd) == Status::Ok;
-          if (ok) plus = Bd * comp.structural;
-          ok = ok && comp.model->error_jacobian(apply_twist(predicted, Twist<double>(-d)), Bd) == Status::Ok;
-          if (ok) minus = Bd * comp.structural;
+          ok = structural_twist(apply_twist(predicted, d), plus) &&
+               structural_twist(apply_twist(predicted, Twist<double>(-d)), minus);
           if (ok) joint_map.col(i) += (plus - minus) / (2 * h);
         }
         if (!ok) joint_map.setIdentity();

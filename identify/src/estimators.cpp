@@ -325,15 +325,34 @@ PreparedDesign::PreparedDesign(const LinearProblem& problem, Options options) {
   } else {
     Hw = problem.H;
   }
-  // Rank on the unit-norm columns (units differ between columns); the
-  // estimators themselves use the SVD of the unscaled whitened design, as
-  // seed 000 Eqs. (11)–(14) are written for it.
-  const RankReport rr = rank_by_svd(Hw, options.rcond, ColumnScaling::UnitNorm);
-  Eigen::BDCSVD<MatrixXd> svd(Hw, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  U_ = svd.matrixU();
-  V_ = svd.matrixV();
-  s_ = svd.singularValues();
+  // One factorisation serves the rank, every estimator and the outlier
+  // statistics (issue #13): the Householder QR Hw = Q·R, then the SVD of the
+  // m × m factor R = U_R·S·Vᵀ, so Hw = (Q·U_R)·S·Vᵀ. The rank is judged on
+  // the unit-norm columns (units differ between columns), i.e. on R·D⁻¹;
+  // the estimators use the SVD of the unscaled whitened design, as seed 000
+  // Eqs. (11)–(14) are written for it.
+  // Q stays implicit (its reflectors): an estimate needs only Qᵀy, which
+  // costs 4nm flops, where forming Q·U_R would cost 4nm².
+  RankReport rr;
+  rows_ = n;
+  tall_ = n > m;
+  if (tall_) {
+    qr_.compute(Hw);
+    const MatrixXd R = qr_.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+    rr = rank_of_factor(R, n, options.rcond, ColumnScaling::UnitNorm);
+    const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    U_ = svd.matrixU();
+    V_ = svd.matrixV();
+    s_ = svd.singularValues();
+  } else {  // as many rows as columns or fewer: rank-deficient or square, small
+    rr = rank_by_svd(Hw, options.rcond, ColumnScaling::UnitNorm);
+    const Eigen::BDCSVD<MatrixXd> svd(Hw, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    U_ = svd.matrixU();
+    V_ = svd.matrixV();
+    s_ = svd.singularValues();
+  }
   rank_ = rr.rank;
+  scaled_condition_number_ = rr.condition_number;
   // Guard against a design whose unscaled spectrum is degenerate although the
   // scaled one is not (column norms differing by ~1/ε).
   const double floor = static_cast<double>(std::max(n, m)) * std::numeric_limits<double>::epsilon() * s_(0);
@@ -380,10 +399,30 @@ double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const
   }
   const auto Ur = U_.leftCols(rank_);
   ws.c.resize(rank_);
-  ws.c.noalias() = Ur.transpose() * ws.yw;
+  if (!tall_) {
+    ws.c.noalias() = Ur.transpose() * ws.yw;
+    ws.r = ws.yw;
+    ws.r.noalias() -= Ur * ws.c;
+    return ws.r.squaredNorm();
+  }
+  // z = Qᵀ y_w: the first m entries are in R's range, the rest is the
+  // residual of the full column space; RSS on the rank used adds what of
+  // z_top the first `rank_` columns of U_R do not reach.
   ws.r = ws.yw;
-  ws.r.noalias() -= Ur * ws.c;
-  return ws.r.squaredNorm();
+  ws.r.applyOnTheLeft(qr_.householderQ().transpose());
+  const Index m = cols();
+  ws.c.noalias() = Ur.transpose() * ws.r.head(m);
+  ws.coef = ws.r.head(m);
+  ws.coef.noalias() -= Ur * ws.c;
+  return ws.coef.squaredNorm() + ws.r.tail(rows_ - m).squaredNorm();
+}
+
+Eigen::MatrixXd PreparedDesign::U() const {
+  if (!tall_) return U_;
+  MatrixXd U = MatrixXd::Zero(rows_, cols());
+  U.topRows(cols()) = U_;
+  U.applyOnTheLeft(qr_.householderQ());
+  return U;
 }
 
 // x = V_r · coef; ws.coef holds f_j c_j / s_j on entry.
@@ -782,16 +821,24 @@ double f_distribution_upper_tail(double f, double d1, double d2) {
 
 OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options, double rcond) {
   validate(problem);
+  return detect_outliers(PreparedDesign(problem, {rcond, true}), problem, options);
+}
+
+OutlierReport detect_outliers(const PreparedDesign& design, const LinearProblem& problem,
+                              const OutlierOptions& options) {
+  validate(problem);
   if (!(options.alpha > 0 && options.alpha < 1)) throw InputError("outliers: alpha " + fmt(options.alpha) + " not in (0, 1)");
-  const PreparedDesign design(problem, {rcond, true});
   FitWorkspace ws;
   VectorXd x;
   const FitInfo info = design.ols(problem.y, x, ws);
   const Index n = design.rows(), m = design.rank();
-  const VectorXd& r = ws.r;  // whitened OLS residuals
+  // Leverages and residuals from the design's factorisation: U (formed once
+  // here) and r = y_w − U_r·c, the whitened OLS residuals.
+  const MatrixXd U_all = design.U();
+  const auto U = U_all.leftCols(m);
+  const VectorXd r = ws.yw - U * ws.c;
   const double rss = info.rss;
   const double nu = static_cast<double>(n - m);
-  const auto U = design.U().leftCols(m);
   constexpr double kLeverageOne = 1e-10;  // 1 − h below this: the row alone fixes a direction
 
   OutlierReport rep;
@@ -879,14 +926,19 @@ LinearProblem on_independent_columns(const LinearProblem& problem) {
 
 }  // namespace
 
-SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options) {
+SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options,
+                                       const OutlierReport* first_round) {
   SequentialOutliers out;
   LinearProblem rest = on_independent_columns(problem);
+  // The caller's report holds for the first round when it tested this very
+  // problem: the same columns (none dropped above) and the same α.
+  if (first_round != nullptr && (rest.H.cols() != problem.H.cols() || first_round->alpha != options.alpha))
+    first_round = nullptr;
   OutlierOptions o;
   o.alpha = options.alpha;
   Index limit = 0, nodes = 0;
   for (;;) {
-    const OutlierReport rep = detect_outliers(rest, o);
+    const OutlierReport rep = out.removed.empty() && first_round != nullptr ? *first_round : detect_outliers(rest, o);
     if (out.removed.empty()) {
       out.p_threshold = rep.p_threshold;
       nodes = Index(rep.nodes.size());

@@ -467,6 +467,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
       if (st.outlying) out.outliers.push_back(n.id);
     }
     out.outlier_p_threshold = o.p_threshold;
+    out.outlier_report = o;
   }
   return out;
 }

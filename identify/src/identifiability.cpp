@@ -2,6 +2,7 @@
 // indices, collinearity report. See identifiability.hpp and docs/estimators.md.
 #include "kincal/identify/identifiability.hpp"
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -62,19 +63,24 @@ struct ScaledSvd {
   double rcond = 0, tolerance = 0;
 };
 
-ScaledSvd scaled_svd(const MatrixXd& H, double rcond, ColumnScaling scaling, bool want_v) {
+// The SVD of H·D⁻¹ (n × m) from the triangular factor R of H = Q·R: Q is
+// orthonormal, so H·D⁻¹ = Q·(R·D⁻¹) has the singular values and right
+// singular vectors of the m × m matrix R·D⁻¹, and H's column norms are R's.
+// One Householder QR (2nm² flops) and a small SVD instead of bidiagonalising
+// the whole tall design (issue #13); `rows` is n, for the default rcond.
+ScaledSvd scaled_svd_of_factor(const MatrixXd& R, Index rows, double rcond, ColumnScaling scaling, bool want_v) {
   ScaledSvd out;
-  out.scale = column_scales(H, scaling);
-  const MatrixXd Hs = H * out.scale.cwiseInverse().asDiagonal();
+  out.scale = column_scales(R, scaling);
+  const MatrixXd Rs = R * out.scale.cwiseInverse().asDiagonal();
   if (want_v) {
-    Eigen::BDCSVD<MatrixXd> svd(Hs, Eigen::ComputeFullV);
+    Eigen::BDCSVD<MatrixXd> svd(Rs, Eigen::ComputeFullV);
     out.s = svd.singularValues();
     out.V = svd.matrixV();
   } else {
-    Eigen::BDCSVD<MatrixXd> svd(Hs);
+    Eigen::BDCSVD<MatrixXd> svd(Rs);
     out.s = svd.singularValues();
   }
-  out.rcond = effective_rcond(rcond, H.rows(), H.cols());
+  out.rcond = effective_rcond(rcond, rows, R.cols());
   const double smax = out.s.size() > 0 ? out.s(0) : 0.0;
   out.tolerance = out.rcond * smax;
   out.rank = 0;
@@ -84,17 +90,21 @@ ScaledSvd scaled_svd(const MatrixXd& H, double rcond, ColumnScaling scaling, boo
   return out;
 }
 
-RankReport report_of(const ScaledSvd& sv, const MatrixXd& H, ColumnScaling scaling) {
+ScaledSvd scaled_svd(const MatrixXd& H, double rcond, ColumnScaling scaling, bool want_v) {
+  return scaled_svd_of_factor(triangular_factor(H), H.rows(), rcond, scaling, want_v);
+}
+
+RankReport report_of(const ScaledSvd& sv, Index rows, Index cols, ColumnScaling scaling) {
   RankReport r;
-  r.rows = H.rows();
-  r.cols = H.cols();
+  r.rows = rows;
+  r.cols = cols;
   r.rank = sv.rank;
   r.rcond = sv.rcond;
   r.tolerance = sv.tolerance;
   r.scaling = scaling;
   r.column_scale = sv.scale;
   r.singular_values = sv.s;
-  if (sv.rank < H.cols() || sv.s.size() == 0) {
+  if (sv.rank < cols || sv.s.size() == 0) {
     r.condition_number = std::numeric_limits<double>::infinity();
   } else {
     r.condition_number = sv.s(0) / sv.s(sv.s.size() - 1);
@@ -182,7 +192,17 @@ Eigen::VectorXd column_scales(const Eigen::MatrixXd& H, ColumnScaling scaling) {
 
 RankReport rank_by_svd(const Eigen::MatrixXd& H, double rcond, ColumnScaling scaling) {
   check_design(H, "rank");
-  return report_of(scaled_svd(H, rcond, scaling, false), H, scaling);
+  return report_of(scaled_svd(H, rcond, scaling, false), H.rows(), H.cols(), scaling);
+}
+
+Eigen::MatrixXd triangular_factor(const Eigen::MatrixXd& H) {
+  if (H.rows() <= H.cols()) return H;
+  const Eigen::HouseholderQR<MatrixXd> qr(H);
+  return qr.matrixQR().topRows(H.cols()).triangularView<Eigen::Upper>();
+}
+
+RankReport rank_of_factor(const Eigen::MatrixXd& R, Eigen::Index rows, double rcond, ColumnScaling scaling) {
+  return report_of(scaled_svd_of_factor(R, rows, rcond, scaling, false), rows, R.cols(), scaling);
 }
 
 ColumnSelection reconstruct_by_column_selection(const Eigen::MatrixXd& H, const std::vector<Index>& xi,
@@ -255,7 +275,7 @@ SpectralReduction spectral_reduction(const Eigen::MatrixXd& H, double rcond, Col
   const ScaledSvd sv = scaled_svd(H, rcond, scaling, true);
   SpectralReduction out;
   out.rank = sv.rank;
-  out.rank_report = report_of(sv, H, scaling);
+  out.rank_report = report_of(sv, H.rows(), H.cols(), scaling);
   out.singular_values = sv.s.head(sv.rank);
   // H·D⁻¹ = U S Vᵀ → Δχ = D⁻¹ V₁ Δα, Z₁ = H D⁻¹ V₁ = U₁ S₁.
   out.phi1 = sv.scale.cwiseInverse().asDiagonal() * sv.V.leftCols(sv.rank);
@@ -458,7 +478,7 @@ CollinearityReport collinearity_report(const Eigen::MatrixXd& H, const std::vect
   const Index m = H.cols();
   const ScaledSvd sv = scaled_svd(H, options.rcond, ColumnScaling::UnitNorm, true);
   CollinearityReport rep;
-  rep.rank = report_of(sv, H, ColumnScaling::UnitNorm);
+  rep.rank = report_of(sv, H.rows(), H.cols(), ColumnScaling::UnitNorm);
   for (Index j = 0; j < m; ++j) rep.names.push_back(name_of(names, j));
   const Index r = sv.rank;
   rep.unidentifiable = unidentifiable_from(sv);

@@ -8,8 +8,8 @@
 namespace kincal::identify {
 
 OutlierScreen screen_outliers(const LinearProblem& problem, const std::vector<NodeTest>& nodes,
-                              const SequentialOutlierOptions& options) {
-  const SequentialOutliers s = sequential_outliers(problem, options);
+                              const SequentialOutlierOptions& options, const OutlierReport* first_round) {
+  const SequentialOutliers s = sequential_outliers(problem, options, first_round);
   OutlierScreen out;
   out.systematic = s.systematic;
   out.p_threshold = s.p_threshold;

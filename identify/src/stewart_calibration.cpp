@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/identifiability.hpp"
@@ -167,6 +168,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     return nodes.size();
   };
   LinearProblem last_problem;
+  std::optional<PreparedDesign> last_design;
   Eigen::VectorXd accepted = out.theta;  // θ of the last machine every node's FK reached
   Eigen::VectorXd delta = Eigen::VectorXd::Zero(m);
   double accepted_rss = 0;
@@ -220,16 +222,19 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
     problem.names = names;
     problem.row_node.resize(std::size_t(n));
     for (Eigen::Index r = 0; r < n; ++r) problem.row_node[std::size_t(r)] = r / 6;
-    const RankReport rank = rank_by_svd(H);
-    if (rank.rank < m) throw_rank_deficient(data, at, g, H, names, rank.rank);
-    out.fit = estimate(problem, options.estimator);
+    // One factorisation of H per iteration: rank, estimate and, after the
+    // last iteration, the outlier statistics.
+    PreparedDesign design(problem, {kDefaultRcond, false});
+    if (design.rank() < m) throw_rank_deficient(data, at, g, H, names, design.rank());
+    out.fit = estimate(design, problem, options.estimator);
     delta = out.fit.x - out.theta;
     out.sigma_mm = std::sqrt(out.fit.sigma2_unbiased);
-    out.rank = int(rank.rank);
-    out.condition_number = rank.condition_number;
+    out.rank = int(design.rank());
+    out.condition_number = design.scaled_condition_number();
     out.standard_error = out.fit.standard_error;
     problem.y = y;  // the outlier test below is on the residuals at the solution
     last_problem = std::move(problem);
+    last_design = std::move(design);
     rec.step_norm = delta.norm();
     out.history.push_back(rec);
     // Step 6 / 10: correct and repeat until the correction is negligible
@@ -242,13 +247,14 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   // Nodes inconsistent with the others (a mis-seated reflector, a mistyped
   // row): deleted-node F test at the solution, Bonferroni over the nodes.
   // Reported, never silently excluded.
-  const OutlierReport outliers = detect_outliers(last_problem);
+  const OutlierReport outliers = detect_outliers(*last_design, last_problem);
   for (const NodeStatistic& st : outliers.nodes) {
     const Node& node = nodes[std::size_t(st.node)];
     out.node_tests.push_back({node.id, node.line, st.f, st.p_value, st.testable, st.outlying});
     if (st.outlying) out.outliers.push_back(node.id);
   }
   out.outlier_p_threshold = outliers.p_threshold;
+  out.outlier_report = outliers;
   out.final_problem = std::move(last_problem);
   return out;
 }

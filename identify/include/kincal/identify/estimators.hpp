@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <map>
 #include <optional>
 #include <string>
@@ -243,14 +244,20 @@ class PreparedDesign {
   explicit PreparedDesign(const LinearProblem& problem, Options options);
   explicit PreparedDesign(const LinearProblem& problem) : PreparedDesign(problem, Options{}) {}
 
-  Eigen::Index rows() const { return U_.rows(); }
+  Eigen::Index rows() const { return rows_; }
   Eigen::Index cols() const { return V_.rows(); }
   Eigen::Index rank() const { return rank_; }
   bool full_rank() const { return rank_ == cols(); }
-  const Eigen::MatrixXd& U() const { return U_; }  // n × m (thin)
+  // The n × m thin left singular vectors, formed on request (the estimators
+  // never need them: Q stays implicit, see the constructor).
+  Eigen::MatrixXd U() const;
   const Eigen::MatrixXd& V() const { return V_; }  // m × m
   const Eigen::VectorXd& singular_values() const { return s_; }  // of the whitened, unscaled H
   double condition_number() const;
+  // s_max / s_min of the whitened design on unit-norm columns (inf when
+  // rank-deficient): rank_by_svd's condition number, from the same
+  // factorisation.
+  double scaled_condition_number() const { return scaled_condition_number_; }
   const std::vector<std::string>& names() const { return names_; }
   // "" when full rank; otherwise the rank-deficiency message (columns and
   // null-space combinations), as thrown by ols().
@@ -278,15 +285,21 @@ class PreparedDesign {
   Eigen::VectorXd standard_errors(const Eigen::VectorXd& filter, double sigma2) const;
 
  private:
-  // c = Uᵀ y_w for the rank used, residual of the OLS fit; returns RSS_OLS.
+  // c = Uᵀ y_w for the rank used; returns RSS_OLS. ws.r is not set.
   double project(const Eigen::VectorXd& y, FitWorkspace& ws) const;
   FitInfo finish(FitWorkspace& ws, Eigen::VectorXd& x, double rss_ols) const;
   void require_full_rank() const;
 
+  // Tall design (n > m): Hw = Q·R by Householder QR, R = U_R·S·Vᵀ; qr_
+  // holds Q's reflectors and U_ is U_R (m × m). Otherwise U_ is the thin U.
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;
+  bool tall_ = false;
+  Eigen::Index rows_ = 0;
   Eigen::MatrixXd U_, V_;
   Eigen::VectorXd s_;
   Eigen::VectorXd sqrt_w_;  // empty: unweighted
   Eigen::Index rank_ = 0;
+  double scaled_condition_number_ = 0;
   std::vector<std::string> names_;
   std::string deficiency_;
 };
@@ -330,6 +343,10 @@ struct OutlierReport {
 // Fits OLS on the whitened problem (full rank required) and tests each node.
 OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options = {},
                               double rcond = kDefaultRcond);
+// The same on an existing factorisation of problem's design (the one its last
+// estimate used): the statistics need no other.
+OutlierReport detect_outliers(const PreparedDesign& design, const LinearProblem& problem,
+                              const OutlierOptions& options = {});
 
 // A node's test in terms of the measurement file (calibrations report these):
 // its id and line, the deleted-node F statistic and p-value.
@@ -365,7 +382,11 @@ struct SequentialOutliers {
   bool systematic = false;
   double p_threshold = 0;              // of the first test (α / testable nodes)
 };
-SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options = {});
+// first_round: detect_outliers' report on `problem` itself when the caller
+// already has it (a calibration tests its nodes at its solution); the first
+// round then reuses it instead of factoring the same design again.
+SequentialOutliers sequential_outliers(const LinearProblem& problem, const SequentialOutlierOptions& options = {},
+                                       const OutlierReport* first_round = nullptr);
 
 // The problem without the rows of `nodes` (node ids of row_node, or row
 // indices when row_node is empty). Weights and row_node are carried along.

@@ -151,6 +151,7 @@ struct HybridCalibration {
   std::vector<NodeTest> node_tests;
   std::vector<std::string> outliers;
   double outlier_p_threshold = 0;
+  OutlierReport outlier_report;  // the node test behind node_tests, on fine_problem (empty without test_nodes)
 
   // The fine estimate of an estimator (null for None or without a fine stage),
   // and its 150 Δχ̂ (zeros for None / no fine stage).
@@ -262,5 +263,11 @@ CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal
 // HybridErrorModel name → structural. Throws InputError on a non-hybrid robot
 // or an unknown name.
 HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model);
+
+// The calibration's own node test, reused by the outlier screen's first round
+// (outliers.hpp); none when the nodes were not tested.
+inline const OutlierReport* outlier_report_of(const HybridCalibration& c) {
+  return c.outlier_report.nodes.empty() ? nullptr : &c.outlier_report;
+}
 
 }  // namespace kincal::identify

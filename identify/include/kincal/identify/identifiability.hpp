@@ -37,8 +37,21 @@ struct RankReport {
 
 // Numerical rank: #{ s_j > rcond · s_max } of the (scaled) design,
 // rcond < 0 → max(n, m)·ε.
+// Computed from the triangular factor (triangular_factor): the same numbers
+// as an SVD of the tall design, at a fraction of the work.
 RankReport rank_by_svd(const Eigen::MatrixXd& H, double rcond = kDefaultRcond,
                        ColumnScaling scaling = ColumnScaling::UnitNorm);
+
+// R of H = Q·R (Householder QR; the m × m upper triangle) for a tall H
+// (n > m); H itself otherwise. Q is orthonormal, so R has H's column norms,
+// singular values and right singular vectors.
+Eigen::MatrixXd triangular_factor(const Eigen::MatrixXd& H);
+
+// rank_by_svd of a design H with `rows` rows from the triangular factor R of
+// its QR decomposition, for a caller that already has it (PreparedDesign
+// factors each design once).
+RankReport rank_of_factor(const Eigen::MatrixXd& R, Eigen::Index rows, double rcond = kDefaultRcond,
+                          ColumnScaling scaling = ColumnScaling::UnitNorm);
 
 // ---- seed 000 Section 4.1, the "second way" --------------------------------
 

@@ -27,7 +27,14 @@ struct OutlierScreen {
 
 // `nodes[k]`: id and line of the node numbered k in problem.row_node.
 OutlierScreen screen_outliers(const LinearProblem& problem, const std::vector<NodeTest>& nodes,
-                              const SequentialOutlierOptions& options = {});
+                              const SequentialOutlierOptions& options = {},
+                              const OutlierReport* first_round = nullptr);
+
+// The node test a fit already ran on its final problem, for the screen's
+// first round (sequential_outliers): none by default; a calibration that
+// keeps its report overloads this next to its type (found by argument-
+// dependent lookup), e.g. outlier_report_of(const StewartCalibration&).
+template <class Fit> const OutlierReport* outlier_report_of(const Fit&) { return nullptr; }
 
 // The screen with refits: the sequential search runs about one solution, and
 // leaving a gross error out moves the solution, so the fit is repeated without
@@ -48,7 +55,7 @@ ScreenedFit<Fit> screen_and_refit(const PoseTable& data, const Fit& all, Problem
       std::max<Eigen::Index>(2, Eigen::Index(options.max_fraction * double(nodes_of(all).size())));
   for (int round = 0; round < 5; ++round) {
     options.max_removed = budget - Eigen::Index(out.screen.flagged.size());
-    const OutlierScreen s = screen_outliers(problem_of(out.rest), nodes_of(out.rest), options);
+    const OutlierScreen s = screen_outliers(problem_of(out.rest), nodes_of(out.rest), options, outlier_report_of(out.rest));
     if (round == 0) out.screen.p_threshold = s.p_threshold;
     out.screen.flagged.insert(out.screen.flagged.end(), s.flagged.begin(), s.flagged.end());
     if (s.systematic) {

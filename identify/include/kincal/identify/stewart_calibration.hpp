@@ -70,6 +70,7 @@ struct StewartCalibration {
   std::vector<std::string> outliers;  // ids of nodes inconsistent with the others (reported only)
   double outlier_p_threshold = 0;     // Bonferroni: α / testable nodes
   LinearProblem final_problem;        // the design at the solution and its residuals (row_node: node index)
+  OutlierReport outlier_report;       // the node test behind node_tests, on final_problem
 };
 
 // Identifies θ from the table's `cal` rows (test rows are never used). Each row
@@ -101,5 +102,9 @@ StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTabl
 PoseErrorReport stewart_residuals(const Robot& nominal, const Robot& robot, const PoseTable& data);
 
 CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& calibration, const std::string& data_file);
+
+// The calibration's own node test, reused by the outlier screen's first round
+// (outliers.hpp).
+inline const OutlierReport* outlier_report_of(const StewartCalibration& c) { return &c.outlier_report; }
 
 }  // namespace kincal::identify
