@@ -4,7 +4,8 @@
 #   fuzz/run.sh BUILD_DIR SECONDS [TARGET ...]
 #
 # BUILD_DIR: a build configured with clang and -DKINCAL_BUILD_FUZZERS=ON whose
-# target kincal_fuzzers is built (scripts/test-all.sh fuzz does both).
+# target kincal_fuzzers is built: build/sanitize after scripts/test-all.sh fuzz
+# (which does both; the sanitize stage's tests share that build).
 # SECONDS: the time each target runs. TARGET: pose_table, parameters, robot,
 # model, effect_spec, port_csv_stream (default: all). Each target starts from
 # its checked-in seed corpus (fuzz/corpus/TARGET, copied: the checked-in one is

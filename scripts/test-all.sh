@@ -23,8 +23,9 @@ run_stage() {
   echo "=== $name: build"
   cmake --build "$dir" -j "$jobs"
   echo "=== $name: test"
-  (cd "$dir" && ctest --output-on-failure -j "$jobs")
+  (cd "$dir" && ctest --output-on-failure -j "$jobs" "${ctest_args[@]}")
 }
+ctest_args=()
 
 # The firmware stages' end-to-end test (examples/firmware) runs the host
 # kincal tool (simulate, identify, table, compensate): build/host's, built
@@ -45,11 +46,23 @@ host_tool() {
 sanitizer_build=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
                  -DKINCAL_SANITIZE=ON -DKINCAL_BUILD_FUZZERS=ON -DKINCAL_BUILD_BENCHMARKS=OFF)
 
+# Under the sanitizers the hybrid's identification with effects (backward
+# elimination, each pass a nonlinear base fit) runs ~70x slower than in
+# Release: these five tests took 3-15 s there and 3.5 to over 10 minutes
+# here. They run in the host stage; their code paths run under the
+# sanitizers in the shorter hybrid tests (BothMachines/HiddenEffect.*/hybrid_*
+# for compliance, backlash, cyclic and thermal, identifyBlunder.*).
+sanitize_skip='HybridOlsAndRidgeBasesCompensateBelowTheOldFloor|ComplianceAndScaleTogetherFitLikeComplianceAlone'
+sanitize_skip+='|HiddenEffect.IsNamedFirstAcceptedAndCompensated/hybrid_scale'
+sanitize_skip+='|IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable|HoldsParametersTheDataCannotTellFromTheBase'
+
 mkdir -p build
 for stage in "${stages[@]}"; do
   case $stage in
     host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
-    sanitize) run_stage sanitize "${sanitizer_build[@]}" ;;
+    sanitize) ctest_args=(-E "$sanitize_skip")
+              run_stage sanitize "${sanitizer_build[@]}"
+              ctest_args=() ;;
     fuzz)     echo "=== fuzz: configure (build/sanitize, shared with the sanitize stage)"
               cmake -S . -B build/sanitize -G Ninja "${sanitizer_build[@]}" > build/sanitize.configure.log 2>&1 \
                 || { cat build/sanitize.configure.log; exit 1; }

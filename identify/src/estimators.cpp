@@ -344,6 +344,7 @@ PreparedDesign::PreparedDesign(const LinearProblem& problem, Options options) {
     U_ = svd.matrixU();
     V_ = svd.matrixV();
     s_ = svd.singularValues();
+    if (options.explicit_u) U_full_ = U();
   } else {  // as many rows as columns or fewer: rank-deficient or square, small
     rr = rank_by_svd(Hw, options.rcond, ColumnScaling::UnitNorm);
     const Eigen::BDCSVD<MatrixXd> svd(Hw, Eigen::ComputeThinU | Eigen::ComputeThinV);
@@ -397,14 +398,15 @@ double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const
   } else {
     ws.yw = y;
   }
-  const auto Ur = U_.leftCols(rank_);
   ws.c.resize(rank_);
-  if (!tall_) {
+  if (!tall_ || U_full_.size() > 0) {
+    const auto Ur = (tall_ ? U_full_ : U_).leftCols(rank_);
     ws.c.noalias() = Ur.transpose() * ws.yw;
     ws.r = ws.yw;
     ws.r.noalias() -= Ur * ws.c;
     return ws.r.squaredNorm();
   }
+  const auto Ur = U_.leftCols(rank_);
   // z = Qᵀ y_w: the first m entries are in R's range, the rest is the
   // residual of the full column space; RSS on the rank used adds what of
   // z_top the first `rank_` columns of U_R do not reach.
@@ -419,6 +421,7 @@ double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const
 
 Eigen::MatrixXd PreparedDesign::U() const {
   if (!tall_) return U_;
+  if (U_full_.size() > 0) return U_full_;
   MatrixXd U = MatrixXd::Zero(rows_, cols());
   U.topRows(cols()) = U_;
   U.applyOnTheLeft(qr_.householderQ());

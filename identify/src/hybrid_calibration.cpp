@@ -633,7 +633,9 @@ HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int ru
   if (!calibration.fine_done) throw InputError("hybrid Monte Carlo: the calibration has no fine stage");
   if (runs < 2 || !(sigma_mm > 0)) throw InputError("hybrid Monte Carlo: needs runs >= 2 and sigma > 0");
   const LinearProblem& fp = calibration.fine_problem;
-  const PreparedDesign design(fp);
+  PreparedDesign::Options many_solves;
+  many_solves.explicit_u = true;
+  const PreparedDesign design(fp, many_solves);
   const Index n = fp.H.rows(), m = fp.H.cols();
   const VectorXd& D = calibration.column_scale;
   const VectorXd x_ref = calibration.ols.x.cwiseProduct(D);  // in fp's (possibly scaled) units
