@@ -43,11 +43,15 @@ for i in range(count):
 EOF
 }
 
-# CPU seconds (user + sys) and peak RSS (MiB) of one command.
+# CPU seconds (user + sys) per run and peak RSS (MiB) of a command run
+# $reps times in a row (/usr/bin/time counts in hundredths of a second: small
+# runs are repeated).
 measure() {
-  /usr/bin/time -f "%U %S %M" -o "$work/time" "$@" > "$work/log" 2>&1 || { cat "$work/log" >&2; return 1; }
+  /usr/bin/time -f "%U %S %M" -o "$work/time" \
+    bash -c 'for ((i = 0; i < $0; ++i)); do "$@" || exit 1; done' "$reps" "$@" > "$work/log" 2>&1 \
+    || { cat "$work/log" >&2; return 1; }
   read -r user sys rss < "$work/time"
-  awk -v u="$user" -v s="$sys" -v m="$rss" 'BEGIN { printf "%.3f s, %.0f MiB", u + s, m / 1024 }'
+  awk -v u="$user" -v s="$sys" -v m="$rss" -v r="$reps" 'BEGIN { printf "%.3f s, %.0f MiB", (u + s) / r, m / 1024 }'
 }
 
 echo "| machine | nodes (cal + test) | identify: CPU, peak RSS | diagnose: CPU, peak RSS |"
@@ -69,6 +73,7 @@ for machine in stewart hybrid; do
     "$kincal" simulate --robot $robot --poses "$work/poses.csv" --errors "$errors" "${effect[@]}" "${noise[@]}" \
       --seed 3 --out "$work/effect.csv" > /dev/null 2>&1
     nodes=$(grep -c -v '^#\|^id' "$work/base.csv")
+    reps=$(( n <= 100 ? 20 : n <= 1000 ? 3 : 1 ))
     id=$(measure "$kincal" identify --robot $robot --data "$work/base.csv" --out "$work/model.json")
     dg=$(measure "$kincal" diagnose --robot $robot --data "$work/effect.csv" --json "$work/diag.json" "${known[@]}")
     accepted=$(python3 -c "import json,sys; print(','.join(json.load(open(sys.argv[1]))['accepted']) or 'none')" "$work/diag.json")
