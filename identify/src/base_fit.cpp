@@ -69,6 +69,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   // fine stage's re-linearisation along Liu's path would only move away from.
   opt.max_linearisations = 1;
   opt.liu_fallback = HybridFineEstimator::None;
+  opt.test_nodes = false;  // the base fit's own screen runs on its final model (outliers.hpp), not here
   const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
   // Start from seed 000's coarse + fine estimate and finish the fit by
   // Gauss–Newton steps on the same identifiable columns: the fine stage is
