@@ -14,77 +14,63 @@ kincal=build/host/apps/kincal
 mkdir -p out
 
 # ---------------------------------------------------------------- the main job
-# The whole loop on a data set with a hidden effect: the machine below has
-# seed 001's Table 3 errors AND a thermal expansion the base model lacks; the
-# structure warms from 20 to 26 C over the run. The diagnosis is not told.
-hidden="thermal:c=1.2e-5"
-design=examples/seed001/diagnosis_poses.csv
+# The whole loop on a data set with a hidden effect the diagnosis is not told
+# of: simulate -> identify -> diagnose -> add the effect -> compensate, with
+# the held-out pose error at each step. Arguments: the output prefix
+# (out/PREFIX_*), robot, its hidden errors, the hidden effect, the pose design,
+# the pattern of its held-out rows, the base model's name, the noise the
+# diagnosis is given (um), then simulate's noise options.
+whole_loop() {
+  local prefix=$1 robot=$2 errors=$3 hidden=$4 design=$5 test_rows=$6 base=$7 noise_um=$8
+  shift 8
+  local o=out/$prefix
+  # The pose error the erroneous machine reaches on joints $1 (JOINTS.csv, or
+  # the poses for the uncompensated machine), RMS over the held-out poses.
+  held_out_error() {
+    $kincal simulate --robot "$robot" --poses "$1" --errors "$errors" --effect "$hidden" --out out/main_reached.csv
+    $kincal errors --data out/main_reached.csv | awk '$1 == "all" { printf "%s um RMS (max %s um)\n", $5, $3 }'
+  }
+  $kincal simulate --robot "$robot" --poses "$design" --errors "$errors" --effect "$hidden" "$@" --seed 2026 \
+    --out "${o}_measured.csv"
+  grep -E "^(id|$test_rows)" "$design" > "${o}_test_poses.csv"
+  echo
+  echo "   step 0, no calibration:        held-out pose error $(held_out_error "${o}_test_poses.csv")"
+  $kincal identify --robot "$robot" --data "${o}_measured.csv" --out "${o}_model_base.json" > /dev/null
+  $kincal compensate --robot "$robot" --model "${o}_model_base.json" --poses "${o}_test_poses.csv" \
+    --out "${o}_joints_base.csv"
+  echo "   step 1, base model ($base): held-out pose error $(held_out_error "${o}_joints_base.csv")"
+  echo
+  echo "   step 2, diagnose: where does the base model fail, and which effect is missing?"
+  $kincal diagnose --robot "$robot" --data "${o}_measured.csv" --noise-um "$noise_um" --quiet \
+    --json "${o}_diagnosis.json" --report "${o}_report.html" | sed 's/^/   /'
+  local accepted
+  accepted=$(python3 -c 'import json,sys; print(",".join(json.load(open(sys.argv[1]))["accepted"]))' \
+    "${o}_diagnosis.json")
+  echo
+  echo "   step 3, add the accepted effect(s) [$accepted] and identify again:"
+  $kincal identify --robot "$robot" --data "${o}_measured.csv" --effects "$accepted" \
+    --out "${o}_model.json" | sed 's/^/   /'
+  $kincal compensate --robot "$robot" --model "${o}_model.json" --poses "${o}_test_poses.csv" \
+    --out "${o}_joints.csv"
+  echo "   step 4, base + $accepted:        held-out pose error $(held_out_error "${o}_joints.csv")"
+  echo "   (hidden: $hidden; report: ${o}_report.html)"
+}
+
+# The 6-UPS: seed 001's Table 3 errors AND a thermal expansion the base model
+# lacks; the structure warms from 20 to 26 C over the run.
 echo
 echo "== main job: simulate -> identify -> diagnose -> add the effect -> compensate -> report"
 echo "   stewart-seed001, 100 poses (67 cal, 33 held out), tracker noise 1 um / 5 urad, one hidden effect"
-$kincal simulate --robot stewart-seed001 --poses "$design" --errors examples/seed001/errors.csv \
-  --effect "$hidden" --noise-mm 0.001 --noise-rad 0.000005 --seed 2026 --out out/main_measured.csv
-grep -E '^(id|N[0-9]+,test)' "$design" > out/main_test_poses.csv
-# The pose error the erroneous machine (robot $1, hidden errors $2 and effect
-# $3) reaches on joints $4 (JOINTS.csv, or the poses for the uncompensated
-# machine), RMS over the held-out poses.
-held_out_error() {
-  $kincal simulate --robot "$1" --poses "$4" --errors "$2" --effect "$3" --out out/main_reached.csv
-  $kincal errors --data out/main_reached.csv | awk '$1 == "all" { printf "%s um RMS (max %s um)\n", $5, $3 }'
-}
-stewart_error() { held_out_error stewart-seed001 examples/seed001/errors.csv "$hidden" "$1"; }
-echo
-echo "   step 0, no calibration:        held-out pose error $(stewart_error out/main_test_poses.csv)"
-$kincal identify --robot stewart-seed001 --data out/main_measured.csv --out out/main_model_base.json > /dev/null
-$kincal compensate --robot stewart-seed001 --model out/main_model_base.json \
-  --poses out/main_test_poses.csv --out out/main_joints_base.csv
-echo "   step 1, base model (seed 001): held-out pose error $(stewart_error out/main_joints_base.csv)"
-echo
-echo "   step 2, diagnose: where does the base model fail, and which effect is missing?"
-$kincal diagnose --robot stewart-seed001 --data out/main_measured.csv --noise-um 1 --quiet \
-  --json out/main_diagnosis.json --report out/main_report.html | sed 's/^/   /'
-accepted=$(python3 -c 'import json,sys; print(",".join(json.load(open("out/main_diagnosis.json"))["accepted"]))')
-echo
-echo "   step 3, add the accepted effect(s) [$accepted] and identify again:"
-$kincal identify --robot stewart-seed001 --data out/main_measured.csv --effects "$accepted" \
-  --out out/main_model.json | sed 's/^/   /'
-$kincal compensate --robot stewart-seed001 --model out/main_model.json \
-  --poses out/main_test_poses.csv --out out/main_joints.csv
-echo "   step 4, base + $accepted:        held-out pose error $(stewart_error out/main_joints.csv)"
-echo "   (hidden: $hidden; report: out/main_report.html)"
+whole_loop main stewart-seed001 examples/seed001/errors.csv "thermal:c=1.2e-5" \
+  examples/seed001/diagnosis_poses.csv 'N[0-9]+,test' "seed 001" 1 --noise-mm 0.001 --noise-rad 0.000005
 
-# The same loop on the hybrid polishing robot (seed 000's machine and gauge):
-# its examples' source errors AND a periodic lead-screw error of UPS leg 1
-# (4 um amplitude) the base model lacks. The diagnosis is not told.
-hybrid_hidden="cyclic:a1=0.004"
-hybrid_design=examples/hybrid-seed000/diagnosis_poses.csv
-hybrid_error() { held_out_error hybrid-seed000 examples/hybrid-seed000/errors.csv "$hybrid_hidden" "$1"; }
+# The hybrid polishing robot (seed 000's machine and gauge): its examples'
+# source errors AND a periodic lead-screw error of UPS leg 1 (4 um amplitude).
 echo
-echo "== main job on the hybrid: simulate -> identify -> diagnose -> add the effect -> compensate"
+echo "== main job on the hybrid: simulate -> identify -> diagnose -> add the effect -> compensate -> report"
 echo "   hybrid-seed000, 3 layers x 49 poses (layer 2 held out), gauge with 5 um noise, one hidden effect"
-$kincal simulate --robot hybrid-seed000 --poses "$hybrid_design" --errors examples/hybrid-seed000/errors.csv \
-  --effect "$hybrid_hidden" --noise-mm 0.005 --seed 2026 --out out/main_hybrid_measured.csv
-grep -E '^(id|L2-)' "$hybrid_design" > out/main_hybrid_test_poses.csv
-echo
-echo "   step 0, no calibration:           held-out pose error $(hybrid_error out/main_hybrid_test_poses.csv)"
-$kincal identify --robot hybrid-seed000 --data out/main_hybrid_measured.csv --out out/main_hybrid_model_base.json \
-  > /dev/null
-$kincal compensate --robot hybrid-seed000 --model out/main_hybrid_model_base.json \
-  --poses out/main_hybrid_test_poses.csv --out out/main_hybrid_joints_base.csv
-echo "   step 1, base model (seed 000):    held-out pose error $(hybrid_error out/main_hybrid_joints_base.csv)"
-echo
-echo "   step 2, diagnose:"
-$kincal diagnose --robot hybrid-seed000 --data out/main_hybrid_measured.csv --noise-um 5 --quiet \
-  --json out/main_hybrid_diagnosis.json --report out/main_hybrid_report.html | sed 's/^/   /'
-hybrid_accepted=$(python3 -c 'import json,sys; print(",".join(json.load(open("out/main_hybrid_diagnosis.json"))["accepted"]))')
-echo
-echo "   step 3, add the accepted effect(s) [$hybrid_accepted] and identify again"
-$kincal identify --robot hybrid-seed000 --data out/main_hybrid_measured.csv --effects "$hybrid_accepted" \
-  --out out/main_hybrid_model.json > /dev/null
-$kincal compensate --robot hybrid-seed000 --model out/main_hybrid_model.json \
-  --poses out/main_hybrid_test_poses.csv --out out/main_hybrid_joints.csv
-echo "   step 4, base + $hybrid_accepted:           held-out pose error $(hybrid_error out/main_hybrid_joints.csv)"
-echo "   (hidden: $hybrid_hidden; report: out/main_hybrid_report.html)"
+whole_loop main_hybrid hybrid-seed000 examples/hybrid-seed000/errors.csv "cyclic:a1=0.004" \
+  examples/hybrid-seed000/diagnosis_poses.csv 'L2-' "seed 000" 5 --noise-mm 0.005
 
 echo
 echo "== 1. stewart-seed001: seed 001 Table 4 reproduced by simulation"
