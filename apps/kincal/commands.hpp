@@ -4,6 +4,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -58,6 +60,17 @@ struct EffectsArgs {
 };
 CLI::App* add_effects_command(CLI::App& app, EffectsArgs& args);
 int run_effects(const EffectsArgs& args);
+
+// `kincal plan`: which poses to measure (identify/plan.hpp).
+struct PlanArgs {
+  std::string robot, out, effects, measure, candidates, json, grid_out;
+  std::size_t count = 0, samples = 5000, test = 0;
+  std::uint64_t seed = 1;
+  double noise_um = 5.0, margin = 0.05;
+  bool quiet = false;
+};
+CLI::App* add_plan_command(CLI::App& app, PlanArgs& args);
+int run_plan(const PlanArgs& args);
 
 // `kincal identify --effects e1,e2`: base model and effects together
 // (identify/effect_calibration.hpp).

@@ -675,6 +675,8 @@ int run(int argc, char** argv) {
   CLI::App* diagnose = kincal_app::add_diagnose_command(app, diag);
   kincal_app::EffectsArgs effects_args;
   CLI::App* effects = kincal_app::add_effects_command(app, effects_args);
+  kincal_app::PlanArgs plan_args;
+  CLI::App* plan = kincal_app::add_plan_command(app, plan_args);
 
   std::string table_model, table_out;
   CLI::App* table = app.add_subcommand(
@@ -688,7 +690,7 @@ int run(int argc, char** argv) {
     for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == first;
     if (!known) {
       std::cerr << "kincal: unknown command '" << first
-                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table, effects; run 'kincal --help')\n";
+                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table, effects, plan; run 'kincal --help')\n";
       return kExitUsage;
     }
   }
@@ -713,6 +715,7 @@ int run(int argc, char** argv) {
   if (*compensate) return run_compensate(comp_robot, comp_model, comp_poses, comp_out);
   if (*table) return run_table(table_model, table_out);
   if (*effects) return kincal_app::run_effects(effects_args);
+  if (*plan) return kincal_app::run_plan(plan_args);
   return kExitUsage;
 }
 

@@ -225,6 +225,14 @@ class Reader {
     }
     return m;
   }
+  // 1–3 points [x, y, z] (the `targets` key).
+  std::vector<Vec3<double>> target_points(const json& j, const std::string& path) const {
+    if (!j.is_array() || j.empty() || j.size() > 3)
+      fail(path, display(path) + " must be an array of 1 to 3 points [x, y, z]");
+    std::vector<Vec3<double>> out;
+    for (std::size_t i = 0; i < j.size(); ++i) out.push_back(vector<3>(j[i], detail::child_path(path, i)));
+    return out;
+  }
   // One positive number for every joint, or one per joint.
   Vec6<double> per_joint_positive(const json& j, const std::string& path) const {
     Vec6<double> v;
@@ -261,7 +269,7 @@ const std::vector<std::string> kCommonRequired = {"format", "version", "family",
 Robot parse_stewart(const json& doc, const Reader& r) {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
-           {"length_offset", "screw_lead", "max_correction"});
+           {"length_offset", "screw_lead", "max_correction", "targets"});
   Robot robot;
   StewartGeometry<double> g;
   g.base = r.points<6>(doc["base_joints"], "/base_joints");
@@ -276,6 +284,7 @@ Robot parse_stewart(const json& doc, const Reader& r) {
                                       r.number(home["ry"], "/home/ry"), r.number(home["rz"], "/home/rz"));
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
   if (doc.contains("max_correction")) robot.max_correction = r.per_joint_positive(doc["max_correction"], "/max_correction");
+  if (doc.contains("targets")) robot.targets = r.target_points(doc["targets"], "/targets");
   robot.geometry = g;
   Vec6<double> q;
   // With the Jacobian: a geometry whose legs cannot hold the platform (six
@@ -294,7 +303,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "platform_to_wrist",
             "wrist_link", "tool_length", "beta", "reference_extension", "joint_limits", "extension_limits"},
-           {"joint_offset", "gauge_radius", "screw_lead", "max_correction"});
+           {"joint_offset", "gauge_radius", "screw_lead", "max_correction", "targets"});
   Robot robot;
   HybridDesign d;
   d.base_joints = r.points<3>(doc["base_joints"], "/base_joints");
@@ -318,6 +327,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
                                                     : HybridSeed000Dimensions::gauge_radius;
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
   if (doc.contains("max_correction")) robot.max_correction = r.per_joint_positive(doc["max_correction"], "/max_correction");
+  if (doc.contains("targets")) robot.targets = r.target_points(doc["targets"], "/targets");
   robot.geometry = make_hybrid_geometry(d);
   Vec6<double> q;
   // With the Jacobian: degenerate joint layouts (base or platform joints at
@@ -475,6 +485,11 @@ std::string robot_to_json(const Robot& robot) {
       j["max_correction"] = m(0);
     else
       j["max_correction"] = vector_json<6>(m);
+  }
+  if (!robot.targets.empty()) {
+    nlohmann::ordered_json t = nlohmann::ordered_json::array();
+    for (const Vec3<double>& p : robot.targets) t.push_back({p.x(), p.y(), p.z()});
+    j["targets"] = t;
   }
   std::string out;
   write_pretty(j, 0, out);

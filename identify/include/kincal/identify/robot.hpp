@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -58,6 +59,11 @@ struct Robot {
   // `max_correction`. Unset = core's default_bounds (5 mm, 0.02 rad). A
   // machine before its first calibration may need more (issue #11 item 3).
   std::optional<Vec6<double>> max_correction;
+  // The optional description key `targets`: 1–3 nominal positions [x, y, z]
+  // of tracker targets (SMRs) on the platform (6-UPS, platform frame) or the
+  // tool (hybrid, tool frame), mm. Empty = none given; the hybrid is then
+  // measured by seed 000's three-target gauge (gauge_radius).
+  std::vector<Vec3<double>> targets;
 
   bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
   bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }

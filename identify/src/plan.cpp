@@ -1,0 +1,940 @@
+// Measurement planning (plan.hpp; docs/plan.md): candidates → design rows →
+// greedy + exchange on the Bayesian D criterion → held-out poses → motion
+// order, and the same numbers for a grid and a random design of the same size.
+#include "kincal/identify/plan.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numeric>
+#include <optional>
+#include <random>
+#include <sstream>
+
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/gauge.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/identifiability.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// The orientation rows of a pose measurement count as the displacement a
+// rotation causes this far from its axis (base_fit.hpp's convention), for the
+// default angle noise and the prior's scale.
+constexpr double kOrientationLeverMm = 200.0;
+// A joint range wider than this is "no limit" (core's ±1e9 defaults).
+constexpr double kUnbounded = 1e8;
+
+std::string fixed(double v, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << v;
+  return os.str();
+}
+
+// A pose the planner may choose.
+struct Candidate {
+  Vec6<double> xyzrpy = Vec6<double>::Zero();
+  Vec6<double> q = Vec6<double>::Zero();
+  Eigen::VectorXi dir;  // approach directions (backlash), else empty
+  std::size_t line = 0;  // source line of a user candidate
+  std::string id;
+};
+
+// ---------------------------------------------------------------- usable poses
+
+class Workspace {
+ public:
+  Workspace(const Robot& robot, const PlanOptions& o) : robot_(robot), margin_(o.margin) {
+    Vec6<double> lo, hi;
+    double ext_lo = 0, ext_hi = 0;
+    if (robot.is_stewart()) {
+      lo = robot.stewart().min_length;
+      hi = robot.stewart().max_length;
+    } else {
+      lo = robot.hybrid().min_joint;
+      hi = robot.hybrid().max_joint;
+      ext_lo = robot.hybrid().min_extension;
+      ext_hi = robot.hybrid().max_extension;
+    }
+    for (int i = 0; i < 6; ++i) {
+      const double range = hi(i) - lo(i);
+      bounded_[i] = range < kUnbounded;
+      lo_(i) = bounded_[i] ? lo(i) + margin_ * range : lo(i);
+      hi_(i) = bounded_[i] ? hi(i) - margin_ * range : hi(i);
+      range_(i) = bounded_[i] ? range : 0.0;
+    }
+    ext_bounded_ = robot.is_hybrid() && ext_hi - ext_lo < kUnbounded;
+    ext_lo_ = ext_bounded_ ? ext_lo + margin_ * (ext_hi - ext_lo) : ext_lo;
+    ext_hi_ = ext_bounded_ ? ext_hi - margin_ * (ext_hi - ext_lo) : ext_hi;
+    Vec6<double> q;
+    std::string why;
+    home_condition_ = std::numeric_limits<double>::infinity();  // no bound while measuring home itself
+    double c = 0;
+    if (!check(robot.home_pose(), q, &why, &c))
+      throw InputError(robot.name, 0, 0,
+                       "the home pose is not usable for planning (" + why + "); lower --margin or check the limits");
+    home_condition_ = c;
+    condition_limit_ = o.singularity_factor * c;
+  }
+
+  // Whether the machine can be measured at `xyzrpy`: IK inside the limits
+  // with the margin, away from singularities. `why` (if given) says what failed.
+  bool usable(const Vec6<double>& xyzrpy, Vec6<double>& q, std::string* why = nullptr) const {
+    return check(Pose<double>::from_xyz_rpy(xyzrpy), q, why, nullptr);
+  }
+  // Per joint: the limit range (0 when the joint has none).
+  const Vec6<double>& range() const { return range_; }
+
+ private:
+  bool check(const Pose<double>& pose, Vec6<double>& q, std::string* why, double* condition) const {
+    Mat6<double> J;
+    Status s;
+    double extension = 0;
+    double L = 1;
+    if (robot_.is_stewart()) {
+      StewartGeometry<double> g = robot_.stewart();
+      g.min_length.setConstant(-1e9);
+      g.max_length.setConstant(1e9);
+      s = stewart_ik(g, pose, q, &J);
+      L = g.characteristic_length;
+    } else {
+      HybridGeometry<double> g = robot_.hybrid();
+      g.min_joint.setConstant(-1e9);
+      g.max_joint.setConstant(1e9);
+      g.min_extension = 0;
+      g.max_extension = 1e9;
+      HybridPassive<double> passive;
+      s = hybrid_ik(g, pose, q, &J, &passive);
+      extension = passive.extension;
+      L = g.characteristic_length;
+    }
+    if (s != Status::Ok) {
+      if (why) *why = std::string("IK: ") + to_string(s);
+      return false;
+    }
+    for (int i = 0; i < 6; ++i)
+      if (q(i) < lo_(i) || q(i) > hi_(i)) {
+        if (why) *why = "q" + std::to_string(i + 1) + " = " + fixed(q(i), 3) + " outside [" + fixed(lo_(i), 3) + ", " +
+              fixed(hi_(i), 3) + "] (the limits less a margin of " + fixed(100 * margin_, 1) + " %)";
+        return false;
+      }
+    if (ext_bounded_ && (extension < ext_lo_ || extension > ext_hi_)) {
+      if (why) *why = "UP extension " + fixed(extension, 3) + " mm outside [" + fixed(ext_lo_, 3) + ", " + fixed(ext_hi_, 3) +
+            "] (the limits less the margin)";
+      return false;
+    }
+    // J = ∂q/∂twist; angles in units of L so its condition number is unit-free.
+    Mat6<double> Js = J;
+    Js.rightCols<3>() /= L;
+    const Eigen::JacobiSVD<Mat6<double>> svd(Js);
+    const Vec6<double> sv = svd.singularValues();
+    const double cond = sv(5) > 0 ? sv(0) / sv(5) : std::numeric_limits<double>::infinity();
+    if (condition != nullptr) *condition = cond;
+    if (!(cond <= condition_limit_)) {
+      if (why) *why = "near a singularity (Jacobian condition number " + fixed(cond, 1) + ", more than " +
+            fixed(condition_limit_ / home_condition_, 1) + " x the home pose's)";
+      return false;
+    }
+    return true;
+  }
+
+  const Robot& robot_;
+  double margin_;
+  Vec6<double> lo_, hi_, range_;
+  std::array<bool, 6> bounded_{};
+  bool ext_bounded_ = false;
+  double ext_lo_ = 0, ext_hi_ = 0;
+  double home_condition_ = 1, condition_limit_ = std::numeric_limits<double>::infinity();
+};
+
+// ---------------------------------------------------------------- design rows
+
+// The identification Jacobian of one pose: measured coordinates (whitened by
+// the noise) per unit parameter of the base model and the effects, and the
+// tool point's displacement (mm) per unit parameter for predicting the
+// held-out error.
+class DesignRows {
+ public:
+  DesignRows(const Robot& robot, const PlanOptions& o, std::vector<std::string>& notes) : robot_(robot) {
+    frame_ = effect_frame(robot);
+    PlanMeasure m = o.measure;
+    if (m == PlanMeasure::Default) m = robot.is_stewart() ? PlanMeasure::Pose : PlanMeasure::Targets;
+    pose_measure_ = m == PlanMeasure::Pose;
+    sigma_mm_ = o.noise_mm;
+    sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
+    if (pose_measure_) {
+      rows_ = 6;
+      measure_ = "the full pose (x, y, z, rx, ry, rz)";
+      if (robot.is_hybrid())
+        notes.push_back("kincal identify reads the hybrid's gauge targets (t1..t3), not full poses; this plan's "
+                        "numbers are for a full-pose instrument");
+    } else if (!robot.targets.empty()) {
+      rows_ = 3 * Index(robot.targets.size());
+      measure_ = std::to_string(robot.targets.size()) + " target position" + (robot.targets.size() > 1 ? "s" : "") +
+                 " (the robot's `targets`)";
+      notes.push_back("kincal identify does not read target positions other than the hybrid's seed 000 gauge yet; "
+                      "this plan's numbers are for such a measurement");
+    } else if (robot.is_hybrid()) {
+      rows_ = 9;
+      gauge_ = true;
+      measure_ = "seed 000's three-target gauge (t1..t3, radius " + fixed(robot.gauge_radius, 1) + " mm)";
+    } else {
+      throw InputError(robot.name, 0, 0,
+                       "--measure targets needs the target positions on the platform: add the key `targets` "
+                       "(1 to 3 points [x, y, z], mm, platform frame) to the robot description");
+    }
+    if (robot.is_stewart()) {
+      for (int leg = 1; leg <= 6; ++leg)
+        for (const char* n : {"dXB", "dYB", "dZB", "dl", "dXP", "dYP", "dZP"}) {
+          names_.push_back(n + std::to_string(leg));
+          units_.push_back("mm");
+        }
+    } else {
+      hybrid_ = std::make_shared<HybridErrorModel>(robot.hybrid());
+    }
+  }
+
+  // The hybrid's base columns: the source errors any pose of the pool can
+  // identify (seed 000 Section 4.1's column selection at calibrate_hybrid's
+  // tolerance, on up to 400 pool poses), encoders first.
+  void select_hybrid_columns(const std::vector<Candidate>& pool) {
+    if (!hybrid_) return;
+    const std::size_t n = std::min<std::size_t>(pool.size(), 400);
+    MatrixXd H(Index(n) * rows_, HybridErrorModel::kParameterCount);
+    MatrixXd B(6, HybridErrorModel::kParameterCount), M;
+    Index r = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const Pose<double> pose = Pose<double>::from_xyz_rpy(pool[k * pool.size() / n].xyzrpy);
+      if (hybrid_->error_jacobian(pose, B) != Status::Ok) continue;
+      measurement_map(pose, M);
+      H.middleRows(r, rows_) = whitening().asDiagonal() * M * B;
+      r += rows_;
+    }
+    std::vector<Index> xi(HybridErrorModel::kEncoderCount), eta;
+    std::iota(xi.begin(), xi.end(), 0);
+    // A column of rounding (a source error no pose moves the targets by)
+    // has a direction but no size; unit-norm column selection would keep it.
+    const double largest = H.topRows(r).colwise().norm().maxCoeff();
+    for (Index j = HybridErrorModel::kEncoderCount; j < HybridErrorModel::kParameterCount; ++j)
+      if (H.topRows(r).col(j).norm() > 1e-9 * largest) eta.push_back(j);
+    std::vector<std::string> all;
+    for (const auto& p : hybrid_->parameters()) all.push_back(p.name);
+    const ColumnSelection sel = reconstruct_by_column_selection(H.topRows(r), xi, eta, all, 1e-4);
+    kept_ = sel.kept;
+    std::sort(kept_.begin(), kept_.end());
+    for (Index j : kept_) {
+      names_.push_back(hybrid_->parameters()[std::size_t(j)].name);
+      units_.push_back(hybrid_->parameters()[std::size_t(j)].unit());
+    }
+  }
+
+  // Effect columns join the base's, named "effect.parameter".
+  void add_effect(const Effect* e) {
+    effects_.push_back(e);
+    for (const std::string& p : e->parameter_names(robot_)) {
+      names_.push_back(e->name() + "." + p);
+      units_.push_back("");
+    }
+  }
+
+  Index rows_per_pose() const { return rows_; }
+  Index base_parameters() const { return robot_.is_stewart() ? kStewartParameterCount : Index(kept_.size()); }
+  Index parameters() const { return Index(names_.size()); }
+  const std::vector<std::string>& names() const { return names_; }
+  const std::vector<std::string>& units() const { return units_; }
+  const std::string& measure() const { return measure_; }
+  // Rows of the measured coordinates that are point displacements (mm).
+  bool position_row(Index i) const { return !pose_measure_ || i < 3; }
+
+  // A (rows × parameters, whitened) and P (3 × parameters, mm per unit) of a
+  // pose; false when its model cannot be evaluated.
+  bool rows(const Candidate& c, const std::optional<EffectNode>& node, Eigen::Ref<MatrixXd> A,
+            Eigen::Ref<MatrixXd> P) const {
+    const Pose<double> pose = Pose<double>::from_xyz_rpy(c.xyzrpy);
+    MatrixXd T(6, parameters());  // tool twist per unit parameter
+    if (robot_.is_stewart()) {
+      T.leftCols(kStewartParameterCount) = stewart_error_jacobian(robot_.stewart(), pose);
+    } else {
+      MatrixXd B(6, HybridErrorModel::kParameterCount);
+      if (hybrid_->error_jacobian(pose, B) != Status::Ok) return false;
+      for (std::size_t j = 0; j < kept_.size(); ++j) T.col(Index(j)) = B.col(kept_[j]);
+    }
+    Index col = base_parameters();
+    for (const Effect* e : effects_) {
+      const Index k = Index(e->parameter_names(robot_).size());
+      if (!node) return false;
+      MatrixXd t(6, k);
+      e->twist_columns(robot_, frame_, *node, t);
+      T.middleCols(col, k) = t;
+      col += k;
+    }
+    if (!T.allFinite()) return false;
+    MatrixXd M;
+    measurement_map(pose, M);
+    A = whitening().asDiagonal() * M * T;
+    P = T.topRows(3);
+    return true;
+  }
+
+  VectorXd whitening() const {
+    VectorXd w = VectorXd::Constant(rows_, 1.0 / sigma_mm_);
+    if (pose_measure_) w.tail(3).setConstant(1.0 / sigma_rad_);
+    return w;
+  }
+  // Multiplies whitened rows back to mm (angles × the lever) for the prior's scale.
+  VectorXd displacement_scale() const {
+    VectorXd s = VectorXd::Constant(rows_, sigma_mm_);
+    if (pose_measure_) s.tail(3).setConstant(sigma_rad_ * kOrientationLeverMm);
+    return s;
+  }
+
+ private:
+  // Δy = M·twist: I6, the gauge map (seed 000 Eq. (9)), or [I  −[R·t]×] per target.
+  void measurement_map(const Pose<double>& pose, MatrixXd& M) const {
+    if (pose_measure_) {
+      M = MatrixXd::Identity(6, 6);
+    } else if (gauge_) {
+      M = gauge_map(robot_.hybrid(), robot_.gauge_radius, pose);
+    } else {
+      M.resize(rows_, 6);
+      for (std::size_t k = 0; k < robot_.targets.size(); ++k) {
+        const Vec3<double> r = pose.R * robot_.targets[k];
+        Mat3<double> cross;
+        cross << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+        M.block(Index(3 * k), 0, 3, 3).setIdentity();
+        M.block(Index(3 * k), 3, 3, 3) = -cross;
+      }
+    }
+  }
+
+  const Robot& robot_;
+  EffectParameters<double> frame_;
+  bool pose_measure_ = false, gauge_ = false;
+  double sigma_mm_ = 0.005, sigma_rad_ = 0.005 / kOrientationLeverMm;
+  Index rows_ = 6;
+  std::string measure_;
+  std::shared_ptr<HybridErrorModel> hybrid_;
+  std::vector<Index> kept_;
+  std::vector<const Effect*> effects_;
+  std::vector<std::string> names_, units_;
+};
+
+// The effect nodes (static load, joint twists, directions) of candidates.
+std::vector<std::optional<EffectNode>> nodes_of(const Robot& robot, const std::vector<Candidate>& cs, bool with_dir) {
+  PoseTable t;
+  t.has_dir = with_dir;
+  t.rows.resize(cs.size());
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    t.rows[k].commanded = cs[k].xyzrpy;
+    if (with_dir) t.rows[k].dir = cs[k].dir;
+  }
+  return effect_nodes(robot, t);
+}
+
+// ---------------------------------------------------------------- the criterion
+
+// log det(I + Σ_sel Â_cᵀÂ_c) over a pool of poses, Â = whitened rows scaled
+// so the prior is the identity, with each pose's gain and the inverse kept
+// up to date by rank-r updates (Fedorov's exchange formulas for r rows).
+class DOptimal {
+ public:
+  // r ≤ 9 measured coordinates per pose: the r × r algebra stays on the stack.
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
+
+  DOptimal(const MatrixXd& A, Index r) : A_(A), r_(r), n_(A.rows() / r), p_(A.cols()) { reset({}); }
+  // Pose c's rows.
+  Eigen::Block<const MatrixXd> block(Index c) const { return Eigen::Block<const MatrixXd>(A_, c * r_, 0, r_, p_); }
+
+  void reset(const std::vector<Index>& chosen) {
+    MatrixXd K = MatrixXd::Identity(p_, p_);
+    for (Index c : chosen) K.noalias() += block(c).transpose() * block(c);
+    const Eigen::LLT<MatrixXd> llt(K);
+    Kinv_ = llt.solve(MatrixXd::Identity(p_, p_));
+    log_det_ = 2 * llt.matrixLLT().diagonal().array().log().sum();
+    S_.resize(n_ * r_, r_);
+    const MatrixXd AK = A_ * Kinv_;
+    for (Index c = 0; c < n_; ++c)
+      S_.middleRows(c * r_, r_).noalias() = AK.middleRows(c * r_, r_).lazyProduct(block(c).transpose());
+    refresh_gains();
+  }
+  double log_det() const { return log_det_; }
+  // Gain in log det of adding pose c (the loss of removing it, for a chosen c,
+  // is −log det(I − S_c)).
+  double gain(Index c) const { return gain_(c); }
+  void add(Index c) { update(c, +1); }
+  void remove(Index c) { update(c, -1); }
+
+  // The state before a tentative change, to go back to without a second update.
+  struct Saved {
+    MatrixXd Kinv, S;
+    VectorXd gain;
+    double log_det = 0;
+  };
+  void save(Saved& s) const { s = Saved{Kinv_, S_, gain_, log_det_}; }
+  void restore(Saved& s) {
+    Kinv_.swap(s.Kinv);
+    S_.swap(s.S);
+    gain_.swap(s.gain);
+    log_det_ = s.log_det;
+  }
+
+ private:
+  static double log_det_of(const Small& m) {
+    const Eigen::LLT<Small> llt(m);
+    if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
+    return 2 * llt.matrixLLT().diagonal().array().log().sum();
+  }
+  void refresh_gains() {
+    gain_.resize(n_);
+    for (Index c = 0; c < n_; ++c) gain_(c) = log_det_of(Small::Identity(r_, r_) + S_.middleRows(c * r_, r_));
+  }
+  // K ± Â_cᵀÂ_c: K⁻¹ ∓ V·(I ± S_c)⁻¹·Vᵀ with V = K⁻¹Â_cᵀ; every S_d changes
+  // by ∓ G_d·(I ± S_c)⁻¹·G_dᵀ with G_d = Â_d·V.
+  void update(Index c, int sign) {
+    const MatrixXd V = Kinv_ * block(c).transpose();  // p × r
+    const Small middle = Small::Identity(r_, r_) + double(sign) * S_.middleRows(c * r_, r_);
+    log_det_ += double(sign) * log_det_of(middle);
+    const Small F = middle.llt().solve(Small::Identity(r_, r_));
+    Kinv_.noalias() -= double(sign) * (V * F) * V.transpose();
+    const MatrixXd G = A_ * V;  // (n·r) × r
+    const MatrixXd GF = double(sign) * G * F;
+    // r × r per pose: a coefficient-wise product, not a GEMM call per pose.
+    for (Index d = 0; d < n_; ++d) {
+      S_.middleRows(d * r_, r_).noalias() -= GF.middleRows(d * r_, r_).lazyProduct(G.middleRows(d * r_, r_).transpose());
+      gain_(d) = log_det_of(Small::Identity(r_, r_) + S_.middleRows(d * r_, r_));
+    }
+  }
+
+  const MatrixXd& A_;
+  Index r_, n_, p_;
+  MatrixXd Kinv_, S_;
+  VectorXd gain_;
+  double log_det_ = 0;
+};
+
+// ---------------------------------------------------------------- motion order
+
+// Largest joint move as a fraction of that joint's range (the move's time on
+// a machine whose joints move at once).
+double move_cost(const Vec6<double>& a, const Vec6<double>& b, const Vec6<double>& range) {
+  double m = 0;
+  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(a(i) - b(i)) / range(i));
+  return m;
+}
+
+// Nearest neighbour from the home joints, then 2-opt until no reversal
+// shortens the open path.
+std::vector<std::size_t> motion_order(const std::vector<Vec6<double>>& q, const Vec6<double>& home,
+                                      const Vec6<double>& range, double& length) {
+  const std::size_t n = q.size();
+  std::vector<std::size_t> order;
+  std::vector<bool> used(n, false);
+  Vec6<double> at = home;
+  for (std::size_t k = 0; k < n; ++k) {
+    std::size_t best = n;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < n; ++j)
+      if (!used[j] && move_cost(at, q[j], range) < best_cost) {
+        best_cost = move_cost(at, q[j], range);
+        best = j;
+      }
+    used[best] = true;
+    order.push_back(best);
+    at = q[best];
+  }
+  auto point = [&](std::size_t i) -> const Vec6<double>& { return i == 0 ? home : q[order[i - 1]]; };
+  // Positions 0..n in the path: 0 is home, i ≥ 1 is order[i − 1].
+  for (int pass = 0; pass < 50; ++pass) {
+    bool improved = false;
+    for (std::size_t i = 0; i + 1 < n; ++i)
+      for (std::size_t j = i + 2; j <= n; ++j) {
+        // Reverse path positions i+1..j.
+        const double before = move_cost(point(i), point(i + 1), range) +
+                              (j < n ? move_cost(point(j), point(j + 1), range) : 0.0);
+        const double after = move_cost(point(i), point(j), range) +
+                             (j < n ? move_cost(point(i + 1), point(j + 1), range) : 0.0);
+        if (after < before - 1e-12) {
+          std::reverse(order.begin() + std::ptrdiff_t(i), order.begin() + std::ptrdiff_t(j));
+          improved = true;
+        }
+      }
+    if (!improved) break;
+  }
+  length = 0;
+  for (std::size_t i = 0; i < n; ++i) length += move_cost(point(i), point(i + 1), range);
+  return order;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- the plan
+
+MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  auto progress = [&](const std::string& s) {
+    if (o.progress) o.progress(s);
+  };
+  MeasurementPlan plan;
+  if (!(o.noise_mm > 0) || !std::isfinite(o.noise_mm)) throw InputError("", 0, 0, "the noise level must be positive");
+  if (!(o.margin >= 0 && o.margin < 0.5)) throw InputError("", 0, 0, "the margin must lie in [0, 0.5)");
+  if (!(o.prior_mm > 0)) throw InputError("", 0, 0, "the prior must be positive");
+
+  // Effects: known, and what a plan can do for them.
+  std::vector<const Effect*> effects;
+  bool backlash = false;
+  for (const std::string& name : o.effects) {
+    const Effect* e = find_effect(name);
+    if (e == nullptr) throw InputError("", 0, 0, "unknown effect '" + name + "' (known: " + effect_names() + ")");
+    if (name == "thermal") {
+      plan.notes.push_back(
+          "thermal is not in the criterion: its parameter is seen only through the structure's temperature "
+          "change while measuring, which no choice of poses creates; measure the plan over a temperature span "
+          "(for example once cold and again warm, 5 C or more apart) with a temp column");
+      continue;
+    }
+    PoseTable probe;
+    probe.rows.resize(2);
+    probe.has_dir = true;
+    const std::string missing = e->missing_inputs(probe);
+    if (!missing.empty()) {
+      plan.notes.push_back(name + " is not in the criterion: it needs what a plan cannot choose (" + missing + ")");
+      continue;
+    }
+    effects.push_back(e);
+    plan.effects.push_back(name);
+    backlash = backlash || name == "backlash";
+  }
+  if (backlash)
+    plan.notes.push_back("backlash: each pose has approach directions dir1..dir6; approach it so that joint i's "
+                         "last move was in direction dir_i (for example from a point 1 mm back along each joint)");
+
+  DesignRows design(robot, o, plan.notes);
+  plan.rows_per_pose = std::size_t(design.rows_per_pose());
+  plan.measure = design.measure();
+  const Workspace workspace(robot, o);
+  std::mt19937_64 rng(o.seed);
+  auto random_dir = [&]() {
+    Eigen::VectorXi d(6);
+    for (int i = 0; i < 6; ++i) d(i) = (rng() & 1u) ? 1 : -1;
+    return d;
+  };
+
+  // Candidates: the user's, or a uniform sample of the box each degree of
+  // freedom reaches alone from home (bisection), kept where usable.
+  const Vec6<double> home = robot.home_pose().to_xyz_rpy();
+  Vec6<double> reach_lo, reach_hi;
+  {
+    double size = 0;
+    if (robot.is_stewart())
+      size = robot.stewart().base.colwise().norm().maxCoeff();
+    else
+      size = robot.hybrid().base_joints.colwise().norm().maxCoeff() + robot.hybrid().tool_length;
+    for (int d = 0; d < 6; ++d)
+      for (int sign : {-1, 1}) {
+        double good = 0, bad = d < 3 ? 2 * size : 1.5;
+        Vec6<double> q;
+        for (int it = 0; it < 30; ++it) {
+          const double mid = 0.5 * (good + bad);
+          Vec6<double> x = home;
+          x(d) += sign * mid;
+          (workspace.usable(x, q) ? good : bad) = mid;
+        }
+        (sign < 0 ? reach_lo : reach_hi)(d) = sign * good;
+      }
+  }
+  std::vector<Candidate> pool;
+  std::string first_rejected;
+  if (!o.candidates.rows.empty()) {
+    plan.candidates = o.candidates.rows.size();
+    for (const PoseRow& row : o.candidates.rows) {
+      Candidate c;
+      c.xyzrpy = row.commanded;
+      c.line = row.line;
+      c.id = row.id;
+      std::string why;
+      if (!workspace.usable(c.xyzrpy, c.q, &why)) {
+        if (first_rejected.empty())
+          first_rejected = o.candidates.file + ":" + std::to_string(row.line) + ": row '" + row.id + "': " + why;
+        continue;
+      }
+      if (backlash) c.dir = row.dir ? Eigen::VectorXi(*row.dir) : random_dir();
+      pool.push_back(std::move(c));
+    }
+  } else {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const std::size_t max_draws = 200 * std::max<std::size_t>(o.sample_count, 1);
+    std::size_t draws = 0;
+    while (pool.size() < o.sample_count && draws < max_draws) {
+      ++draws;
+      Candidate c;
+      for (int d = 0; d < 6; ++d) c.xyzrpy(d) = home(d) + reach_lo(d) + u(rng) * (reach_hi(d) - reach_lo(d));
+      if (!workspace.usable(c.xyzrpy, c.q)) continue;
+      if (backlash) c.dir = random_dir();
+      pool.push_back(std::move(c));
+    }
+    plan.candidates = draws;
+  }
+
+  design.select_hybrid_columns(pool);
+  for (const Effect* e : effects) design.add_effect(e);
+  const Index r = design.rows_per_pose(), p = design.parameters();
+  plan.parameter_names = design.names();
+  if (Index(o.count) * r < p) {
+    const Index need = (p + r - 1) / r;
+    throw InputError("", 0, 0,
+                     std::to_string(o.count) + " poses give " + std::to_string(Index(o.count) * r) +
+                         " measured coordinates for " + std::to_string(p) + " parameters; plan at least " +
+                         std::to_string(need) + " poses (more than that to see the noise)");
+  }
+
+  progress(std::to_string(pool.size()) + " usable candidate poses of " + std::to_string(plan.candidates));
+
+  // Design rows of the pool.
+  auto rows_of = [&](std::vector<Candidate>& cs, MatrixXd& A, MatrixXd& P) {
+    const std::vector<std::optional<EffectNode>> nodes =
+        effects.empty() ? std::vector<std::optional<EffectNode>>(cs.size()) : nodes_of(robot, cs, backlash);
+    A.resize(Index(cs.size()) * r, p);
+    P.resize(Index(cs.size()) * 3, p);
+    std::vector<Candidate> kept;
+    Index n = 0;
+    for (std::size_t k = 0; k < cs.size(); ++k) {
+      if (!design.rows(cs[k], nodes[k], A.middleRows(n * r, r), P.middleRows(n * 3, 3))) continue;
+      kept.push_back(cs[k]);
+      ++n;
+    }
+    A.conservativeResize(n * r, p);
+    P.conservativeResize(n * 3, p);
+    cs = std::move(kept);
+  };
+  MatrixXd A, P;
+  rows_of(pool, A, P);
+  plan.usable_candidates = pool.size();
+  if (pool.size() < o.count + o.test_count)
+    throw InputError(o.candidates.rows.empty() ? robot.name : o.candidates.file, 0, 0,
+                     std::to_string(pool.size()) + " of " + std::to_string(plan.candidates) +
+                         " candidate poses are usable (reachable inside the limits with a margin of " +
+                         fixed(100 * o.margin, 1) + " %, away from singularities), fewer than the " +
+                         std::to_string(o.count + o.test_count) + " asked for" +
+                         (first_rejected.empty() ? std::string() : "; first rejected: " + first_rejected));
+
+  // The prior: parameter j moves the measured points by prior_mm RMS over
+  // the pool. Scaling each column by its prior standard deviation τ_j makes
+  // the prior precision the identity.
+  VectorXd tau(p);
+  {
+    const VectorXd back = design.displacement_scale();
+    Index position_rows = 0;
+    for (Index i = 0; i < r; ++i) position_rows += design.position_row(i) ? 1 : 0;
+    for (Index j = 0; j < p; ++j) {
+      double ss = 0;
+      for (Index c = 0; c < Index(pool.size()); ++c)
+        for (Index i = 0; i < r; ++i)
+          if (design.position_row(i)) ss += std::pow(A(c * r + i, j) * back(i), 2);
+      const double rms = std::sqrt(ss / (double(pool.size()) * double(position_rows) / 3.0));
+      tau(j) = rms > 0 ? o.prior_mm / rms : 1.0;
+    }
+  }
+  const MatrixXd As = A * tau.asDiagonal();
+
+  // Evaluation poses for the predicted held-out error: chosen after the plan
+  // (--test) or an even sample of the pool.
+  std::vector<Index> evaluation;
+
+  // Greedy start, then exchange passes.
+  progress("choosing " + std::to_string(o.count) + " poses (greedy)");
+  std::vector<Index> chosen;
+  std::vector<bool> in(pool.size(), false);
+  {
+    DOptimal crit(As, r);
+    for (std::size_t k = 0; k < o.count; ++k) {
+      Index best = -1;
+      for (Index c = 0; c < Index(pool.size()); ++c)
+        if (!in[std::size_t(c)] && (best < 0 || crit.gain(c) > crit.gain(best))) best = c;
+      crit.add(best);
+      in[std::size_t(best)] = true;
+      chosen.push_back(best);
+    }
+  }
+  // Exchange on a shortlist: the chosen poses and the unchosen ones that
+  // would add most to them (a pose that adds little to the design is not
+  // what an exchange brings in), then the shortlist drawn again from the
+  // whole pool at the new design, until a round swaps nothing. Each pass
+  // costs the shortlist's size, not the pool's, in rank-r updates.
+  const std::size_t shortlist_size = std::min(pool.size(), std::max<std::size_t>(400, 10 * o.count));
+  for (int round = 0; round < 10 && plan.exchange_passes < o.max_exchange_passes; ++round) {
+    std::vector<Index> shortlist = chosen;
+    {
+      DOptimal full(As, r);
+      full.reset(chosen);
+      std::vector<Index> rest;
+      for (Index c = 0; c < Index(pool.size()); ++c)
+        if (!in[std::size_t(c)]) rest.push_back(c);
+      const std::size_t extra = std::min(rest.size(), shortlist_size - std::min(shortlist_size, chosen.size()));
+      std::partial_sort(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(),
+                        [&](Index a, Index b) { return full.gain(a) > full.gain(b); });
+      shortlist.insert(shortlist.end(), rest.begin(), rest.begin() + std::ptrdiff_t(extra));
+    }
+    MatrixXd Ash(Index(shortlist.size()) * r, p);
+    for (std::size_t k = 0; k < shortlist.size(); ++k) Ash.middleRows(Index(k) * r, r) = As.middleRows(shortlist[k] * r, r);
+    // Positions in the shortlist: the chosen are its first chosen.size().
+    std::vector<Index> pick(chosen.size());
+    std::iota(pick.begin(), pick.end(), 0);
+    std::vector<bool> taken(shortlist.size(), false);
+    for (Index k : pick) taken[std::size_t(k)] = true;
+    DOptimal crit(Ash, r);
+    crit.reset(pick);
+    DOptimal::Saved saved;
+    int round_swaps = 0;
+    for (; plan.exchange_passes < o.max_exchange_passes;) {
+      int swaps = 0;
+      const double before = crit.log_det();
+      for (std::size_t k = 0; k < pick.size(); ++k) {
+        const Index out = pick[k];
+        crit.save(saved);
+        crit.remove(out);
+        taken[std::size_t(out)] = false;
+        Index best = -1;
+        for (Index c = 0; c < Index(shortlist.size()); ++c)
+          if (!taken[std::size_t(c)] && (best < 0 || crit.gain(c) > crit.gain(best))) best = c;
+        taken[std::size_t(best)] = true;
+        if (best == out) {  // nothing better: back to the state before, no second update
+          crit.restore(saved);
+          continue;
+        }
+        crit.add(best);
+        pick[k] = best;
+        ++swaps;
+      }
+      crit.reset(pick);  // the rank-r updates' rounding, cleared once a pass
+      ++plan.exchange_passes;
+      plan.exchanges += swaps;
+      round_swaps += swaps;
+      progress("exchange pass " + std::to_string(plan.exchange_passes) + ": " + std::to_string(swaps) +
+               " swaps, log det " + fixed(before, 3) + " -> " + fixed(crit.log_det(), 3));
+      if (swaps == 0 || crit.log_det() - before < 1e-6 * std::abs(before)) break;
+    }
+    for (Index c : chosen) in[std::size_t(c)] = false;
+    for (std::size_t k = 0; k < pick.size(); ++k) chosen[k] = shortlist[std::size_t(pick[k])];
+    for (Index c : chosen) in[std::size_t(c)] = true;
+    if (round_swaps == 0) break;
+  }
+
+  // Held-out poses: farthest-point spread over the unchosen pool, in
+  // coordinates scaled by each degree of freedom's reach.
+  std::vector<Index> test;
+  if (o.test_count > 0) {
+    Vec6<double> scale = (reach_hi - reach_lo).cwiseMax(1e-9);
+    auto coord = [&](Index c) -> Vec6<double> {
+      return (pool[std::size_t(c)].xyzrpy - home).cwiseQuotient(scale);
+    };
+    std::vector<double> dist(pool.size(), std::numeric_limits<double>::infinity());
+    Vec6<double> centre = Vec6<double>::Zero();
+    for (const Candidate& c : pool) centre += (c.xyzrpy - home).cwiseQuotient(scale);
+    centre /= double(pool.size());
+    for (Index c = 0; c < Index(pool.size()); ++c) dist[std::size_t(c)] = (coord(c) - centre).norm();  // start far out
+    for (std::size_t k = 0; k < o.test_count; ++k) {
+      Index best = -1;
+      double far = -std::numeric_limits<double>::infinity();
+      for (Index c = 0; c < Index(pool.size()); ++c)
+        if (!in[std::size_t(c)] && dist[std::size_t(c)] > far) {
+          far = dist[std::size_t(c)];
+          best = c;
+        }
+      in[std::size_t(best)] = true;
+      test.push_back(best);
+      for (Index c = 0; c < Index(pool.size()); ++c) {
+        const double d = (coord(c) - coord(best)).norm();
+        dist[std::size_t(c)] = k == 0 ? d : std::min(dist[std::size_t(c)], d);
+      }
+    }
+    evaluation = test;
+  } else {
+    const std::size_t n = std::min<std::size_t>(pool.size(), 300);
+    for (std::size_t k = 0; k < n; ++k) evaluation.push_back(Index(k * pool.size() / n));
+  }
+  plan.evaluation_poses = evaluation.size();
+  MatrixXd Pe(Index(evaluation.size()) * 3, p);
+  for (std::size_t k = 0; k < evaluation.size(); ++k) Pe.middleRows(Index(k) * 3, 3) = P.middleRows(evaluation[k] * 3, 3);
+  const MatrixXd Pes = Pe * tau.asDiagonal();
+
+  // The numbers of a design (its whitened rows A_d).
+  const Index base_p = design.base_parameters();
+  auto assess = [&](const std::string& name, const MatrixXd& Ad) {
+    DesignAssessment a;
+    a.name = name;
+    a.poses = std::size_t(Ad.rows() / r);
+    a.parameters = p;
+    const RankReport rank = rank_by_svd(Ad);
+    a.rank = rank.rank;
+    a.condition_number = rank.condition_number;
+    const MatrixXd Ads = Ad * tau.asDiagonal();
+    MatrixXd K = MatrixXd::Identity(p, p);
+    K.noalias() += Ads.transpose() * Ads;
+    const Eigen::LLT<MatrixXd> llt(K);
+    a.log_det = 2 * llt.matrixLLT().diagonal().array().log().sum();
+    const MatrixXd Kinv = llt.solve(MatrixXd::Identity(p, p));
+    for (Index j = 0; j < p; ++j) {
+      PlanParameter pp;
+      pp.name = design.names()[std::size_t(j)];
+      pp.unit = design.units()[std::size_t(j)];
+      pp.standard_error = tau(j) * std::sqrt(Kinv(j, j));
+      pp.prior = tau(j);
+      pp.determined = std::sqrt(Kinv(j, j)) < 0.5;
+      if (!pp.determined) ++a.undetermined;
+      a.parameter_errors.push_back(pp);
+    }
+    // trace(Pe·Cov·Peᵀ) / poses, Cov = T·K⁻¹·T (in mm²).
+    const double tr = (Pes * Kinv).cwiseProduct(Pes).sum();
+    a.predicted_test_um = 1e3 * std::sqrt(tr / double(evaluation.size()));
+    // Confounding: the share of each effect column's energy inside the base's span.
+    if (p > base_p) {
+      const MatrixXd base = Ad.leftCols(base_p) * column_scales(Ad.leftCols(base_p)).cwiseInverse().asDiagonal();
+      Eigen::ColPivHouseholderQR<MatrixXd> qr(base);
+      qr.setThreshold(1e-10);
+      Index col = base_p;
+      for (const Effect* e : effects) {
+        const Index k = Index(e->parameter_names(robot).size());
+        double sum = 0;
+        int counted = 0;
+        for (Index j = col; j < col + k; ++j) {
+          const double g2 = Ad.col(j).squaredNorm();
+          if (!(g2 > 1e-18 * Ad.leftCols(base_p).squaredNorm())) continue;
+          const VectorXd inside = base * qr.solve(Ad.col(j));
+          sum += std::min(1.0, inside.squaredNorm() / g2);
+          ++counted;
+        }
+        a.confounding.push_back({e->name(), counted > 0 ? sum / counted : 1.0});
+        col += k;
+      }
+    }
+    return a;
+  };
+  auto rows_of_chosen = [&](const std::vector<Index>& idx) {
+    MatrixXd Ad(Index(idx.size()) * r, p);
+    for (std::size_t k = 0; k < idx.size(); ++k) Ad.middleRows(Index(k) * r, r) = A.middleRows(idx[k] * r, r);
+    return Ad;
+  };
+  plan.planned = assess("planned", rows_of_chosen(chosen));
+
+  // Random: as many pool poses drawn at random (the same seed).
+  {
+    std::vector<Index> all(pool.size());
+    std::iota(all.begin(), all.end(), 0);
+    std::shuffle(all.begin(), all.end(), rng);
+    all.resize(o.count);
+    plan.random_assessment = assess("random", rows_of_chosen(all));
+  }
+
+  // Grid: what a user lays out by hand — positions on a lattice over the
+  // box the axes reach, at the home orientation (6-UPS: 3 layers, each pose
+  // tilted at random within ±5° as examples/seed001/grid_poses.csv; hybrid:
+  // one layer of pure translations as seed 000's), shrunk until every node
+  // is usable.
+  {
+    const int layers = robot.is_stewart() ? 3 : 1;
+    const std::size_t per_layer = (o.count + std::size_t(layers) - 1) / std::size_t(layers);
+    const int nx = int(std::ceil(std::sqrt(double(per_layer))));
+    const int ny = int((per_layer + std::size_t(nx) - 1) / std::size_t(nx));
+    std::uniform_real_distribution<double> tilt(-5 * pi<double>() / 180, 5 * pi<double>() / 180);
+    std::vector<Candidate> grid;
+    double f = 0.9;
+    for (int attempt = 0; attempt < 40 && grid.size() < o.count; ++attempt, f *= 0.9) {
+      grid.clear();
+      std::vector<Vec6<double>> lattice;
+      auto at = [&](int i, int n, int d) {
+        return n == 1 ? home(d) : home(d) + f * (reach_lo(d) + (reach_hi(d) - reach_lo(d)) * double(i) / double(n - 1));
+      };
+      for (int l = 0; l < layers; ++l)
+        for (int iy = 0; iy < ny; ++iy)
+          for (int ix = 0; ix < nx; ++ix) {
+            Vec6<double> x = home;
+            x(0) = at(ix, nx, 0);
+            x(1) = at(iy, ny, 1);
+            x(2) = at(l, layers, 2);
+            lattice.push_back(x);
+          }
+      bool all_usable = true;
+      for (std::size_t k = 0; k < o.count && all_usable; ++k) {
+        Candidate c;
+        c.xyzrpy = lattice[k * lattice.size() / o.count];
+        if (robot.is_stewart())
+          for (int d = 3; d < 6; ++d) c.xyzrpy(d) += tilt(rng);
+        all_usable = workspace.usable(c.xyzrpy, c.q);
+        if (backlash) c.dir = random_dir();
+        grid.push_back(c);
+      }
+      if (!all_usable) grid.clear();
+    }
+    if (grid.size() == o.count) {
+      MatrixXd Ag, Pg;
+      rows_of(grid, Ag, Pg);
+      if (grid.size() == o.count) plan.grid_assessment = assess("grid", Ag);
+      plan.grid.has_role = true;
+      plan.grid.has_dir = backlash;
+      for (std::size_t k = 0; k < grid.size(); ++k) {
+        PoseRow row;
+        row.id = "G" + std::to_string(k + 1);
+        row.commanded = grid[k].xyzrpy;
+        if (backlash) row.dir = grid[k].dir;
+        plan.grid.rows.push_back(row);
+      }
+    } else {
+      plan.notes.push_back("no grid of " + std::to_string(o.count) + " usable poses was found to compare with");
+    }
+  }
+
+  // The plan's poses (cal and test together) in motion order.
+  {
+    std::vector<Index> rows = chosen;
+    rows.insert(rows.end(), test.begin(), test.end());
+    std::vector<Vec6<double>> q;
+    for (Index c : rows) q.push_back(pool[std::size_t(c)].q);
+    Vec6<double> range = workspace.range();
+    for (int i = 0; i < 6; ++i)
+      if (!(range(i) > 0)) {  // no limit: the span of the candidates
+        double lo = q.front()(i), hi = lo;
+        for (const Candidate& c : pool) {
+          lo = std::min(lo, c.q(i));
+          hi = std::max(hi, c.q(i));
+        }
+        range(i) = std::max(hi - lo, 1e-9);
+      }
+    Vec6<double> q_home;
+    if (robot.inverse(robot.home_pose(), q_home) != Status::Ok) q_home = q.front();
+    const std::vector<std::size_t> order = motion_order(q, q_home, range, plan.path_length);
+    plan.poses.has_role = true;
+    plan.poses.has_dir = backlash;
+    std::size_t cal = 0, held = 0;
+    for (std::size_t k : order) {
+      const Candidate& c = pool[std::size_t(rows[k])];
+      PoseRow row;
+      const bool is_test = k >= chosen.size();
+      row.role = is_test ? Role::Test : Role::Cal;
+      const std::string n = std::to_string(is_test ? ++held : ++cal);
+      row.id = !c.id.empty() ? c.id : (is_test ? "T" : "P") + std::string(n.size() < 3 ? 3 - n.size() : 0, '0') + n;
+      row.commanded = c.xyzrpy;
+      if (backlash) row.dir = c.dir;
+      plan.poses.rows.push_back(row);
+    }
+  }
+  plan.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return plan;
+}
+
+}  // namespace kincal::identify
