@@ -57,8 +57,14 @@ def main():
     ap.add_argument("--error-mm", type=float, default=0.2)
     ap.add_argument("--error-rad", type=float, default=3e-4)
     ap.add_argument("--test", type=int, default=60)
+    ap.add_argument("--errors", default="", help="a fixed PARAMS.csv as the hidden errors (then --sets is 1)")
+    ap.add_argument("--heldout", default="", help="held-out poses file (its test rows; default: kincal plan --test)")
+    ap.add_argument("--candidates", default="", help="passed to kincal plan --candidates")
+    ap.add_argument("--effect", action="append", default=[], help="a hidden effect NAME:PARAM=VALUE (simulate --effect)")
     ap.add_argument("--work", default="")
     a = ap.parse_args()
+    if a.errors:
+        a.sets = 1
     k = a.kincal
     work = a.work or tempfile.mkdtemp(prefix="plan-study-")
     os.makedirs(work, exist_ok=True)
@@ -69,34 +75,51 @@ def main():
         plan_args += ["--effects", a.effects]
     if a.measure:
         plan_args += ["--measure", a.measure]
+    if a.candidates:
+        plan_args += ["--candidates", a.candidates]
     print(run(plan_args + ["--out", p("planned.csv"), "--grid-out", p("grid.csv"), "--json", p("plan.json")]))
-    run([k, "plan", "--robot", a.robot, "--count", str(a.count), "--test", str(a.test), "--seed", "777", "--quiet",
-         "--out", p("heldout_all.csv")])
+    if a.heldout:
+        with open(a.heldout) as f, open(p("heldout_all.csv"), "w") as g:
+            g.write("".join(l for l in f if not l.startswith("#")))
+    else:
+        run([k, "plan", "--robot", a.robot, "--count", str(a.count), "--test", str(a.test), "--seed", "777",
+             "--quiet", "--out", p("heldout_all.csv")])
     with open(p("heldout_all.csv")) as f:
         lines = f.read().splitlines()
     with open(p("heldout.csv"), "w") as f:
-        f.write("\n".join([lines[0]] + [l for l in lines[1:] if ",test," in l]) + "\n")
+        test_rows = [l for l in lines[1:] if ",test," in l]
+        f.write("\n".join([lines[0]] + test_rows) + "\n")
+    a.test = len(test_rows)
 
     names = [l.split("\t") for l in run([k, "robot", "--robot", a.robot, "--params"]).splitlines() if "\t" in l]
     rng = random.Random(12345)
     results = {"planned": [], "grid": []}
     param_err = {"planned": [], "grid": []}
     failures = {"planned": 0, "grid": 0}
+    effect_values = {"planned": [], "grid": []}
     for s in range(a.sets):
         truth = {}
-        with open(p(f"errors{s}.csv"), "w") as f:
-            f.write("name,value\n")
-            for n, unit, *_ in names:
-                v = rng.uniform(-1, 1) * (a.error_rad if unit == "rad" else a.error_mm)
-                truth[n] = v
-                f.write(f"{n},{v!r}\n")
+        if a.errors:
+            text = open(a.errors).read()
+            open(p(f"errors{s}.csv"), "w").write(text)
+            for line in text.splitlines():
+                f = line.split(",")
+                if len(f) == 2 and not line.startswith("#") and f[0] != "name":
+                    truth[f[0]] = float(f[1])
+        else:
+            with open(p(f"errors{s}.csv"), "w") as f:
+                f.write("name,value\n")
+                for n, unit, *_ in names:
+                    v = rng.uniform(-1, 1) * (a.error_rad if unit == "rad" else a.error_mm)
+                    truth[n] = v
+                    f.write(f"{n},{v!r}\n")
         for d in range(a.draws):
             for design in ("planned", "grid"):
                 tag = f"{design}{s}_{d}"
                 try:
                     run([k, "simulate", "--robot", a.robot, "--poses", p(design + ".csv"), "--out", p(tag + "_m.csv"),
                          "--errors", p(f"errors{s}.csv"), "--noise-mm", str(a.noise_mm), "--noise-rad",
-                         str(a.noise_rad), "--seed", str(1000 * s + d + 1)])
+                         str(a.noise_rad), "--seed", str(1000 * s + d + 1)] + sum((["--effect", e] for e in a.effect), []))
                     ident = [k, "identify", "--robot", a.robot, "--data", p(tag + "_m.csv"), "--out",
                              p(tag + "_model.json")]
                     if a.effects:
@@ -105,10 +128,13 @@ def main():
                     run([k, "compensate", "--robot", a.robot, "--model", p(tag + "_model.json"), "--poses",
                          p("heldout.csv"), "--out", p(tag + "_j.csv")])
                     run([k, "simulate", "--robot", a.robot, "--poses", p(tag + "_j.csv"), "--out", p(tag + "_r.csv"),
-                         "--errors", p(f"errors{s}.csv")])
+                         "--errors", p(f"errors{s}.csv")] + sum((["--effect", e] for e in a.effect), []))
                     results[design].append(rms_position_um(k, p(tag + "_r.csv")))
                     with open(p(tag + "_model.json")) as f:
                         model = json.load(f)
+                    eff = model.get("effects", {})
+                    if eff:
+                        effect_values[design].append(eff)
                     diffs = [(q["value"] - truth[q["name"]]) * 1e3 for q in model.get("parameters", [])
                              if q.get("name") in truth and q.get("unit", "mm") == "mm"]
                     if diffs:
@@ -128,6 +154,9 @@ def main():
         print(f"{design:<10}{len(r):>6}{failures[design]:>8}{statistics.mean(r) if r else float('nan'):>18.2f}"
               f"{statistics.median(r) if r else float('nan'):>12.2f}"
               f"{statistics.mean(pe) if pe else float('nan'):>14.2f}")
+    for design in ("planned", "grid"):
+        if effect_values[design]:
+            print(f"{design} identified effects (first runs): " + "; ".join(json.dumps(e) for e in effect_values[design][:3]))
     if results["planned"] and results["grid"]:
         print(f"planned / grid (mean): {statistics.mean(results['planned']) / statistics.mean(results['grid']):.3f}")
 

@@ -24,6 +24,7 @@
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/parameters.hpp"
+#include "kincal/identify/plan.hpp"
 #include "kincal/identify/robot.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
@@ -264,6 +265,27 @@ void BM_IdentifyHybridWithScale(benchmark::State& state) {
   state.counters["rms_um"] = report.rms_test_um_final;
 }
 
+// `kincal plan`'s work (GUIDE bar: 30 poses from 5 000 candidates ≤ 2 s):
+// sampling the workspace, the design rows of every candidate, greedy +
+// exchange, the grid and random comparisons. Arg: 0 the 6-UPS (30 poses),
+// 1 the hybrid (49 poses).
+void BM_Plan(benchmark::State& state) {
+  const bool hybrid = state.range(0) == 1;
+  const ki::Robot robot = ki::builtin_robot(hybrid ? "hybrid-seed000" : "stewart-seed001");
+  ki::PlanOptions o;
+  o.count = hybrid ? 49 : 30;
+  o.sample_count = 5000;
+  ki::MeasurementPlan plan;
+  for (auto _ : state) {
+    plan = ki::plan_measurements(robot, o);
+    benchmark::DoNotOptimize(plan.poses.rows.data());
+  }
+  state.counters["candidates"] = double(plan.usable_candidates);
+  state.counters["passes"] = double(plan.exchange_passes);
+  state.counters["planned_um"] = plan.planned.predicted_test_um;
+  state.counters["grid_um"] = plan.grid_assessment.predicted_test_um;
+}
+
 BENCHMARK(BM_HybridCoarseFine2x49)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_HybridMonteCarlo10k)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PrepareHybridFineDesign)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
@@ -273,6 +295,7 @@ BENCHMARK(BM_IdentifyStewart)->Arg(108)->Arg(1000)->Arg(10000)->Unit(benchmark::
 BENCHMARK(BM_DiagnoseStewart)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DiagnoseHybrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_IdentifyHybridWithScale)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plan)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 
