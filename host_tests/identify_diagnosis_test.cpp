@@ -419,6 +419,31 @@ TEST(Diagnosis, FewerNodesThanParametersIsAClearError) {
   }
 }
 
+// Issue #15: an effect the poses cannot tell from the base (the hybrid's
+// compliance, > 99 % on seed 000's pure-translation layers) gets what a plan
+// of as many poses for it would leave, from a plan computed by
+// identify/plan.hpp; an effect below 90 % gets none.
+TEST(Diagnosis, AConfoundedEffectIsPointedToAPlan) {
+  const ki::Diagnosis& d = clean_diagnosis("hybrid");
+  bool compliance = false;
+  for (const ki::EffectTest& t : d.ranking) {
+    if (!t.testable) continue;
+    if (t.confounded > 0.9 && t.effect != "thermal") {
+      EXPECT_GE(t.plan_confounded, 0.0) << t.effect;
+      EXPECT_LT(t.plan_confounded, 0.9 * t.confounded) << t.effect << ": " << t.plan_confounded;
+      EXPECT_EQ(t.plan_count, d.rms.cal_nodes);
+      EXPECT_NE(t.plan_effects.find(t.effect), std::string::npos);
+    } else {
+      EXPECT_LT(t.plan_confounded, 0.0) << t.effect;
+    }
+    compliance = compliance || (t.effect == "compliance" && t.plan_confounded >= 0);
+  }
+  EXPECT_TRUE(compliance);
+  const std::string j = ki::diagnosis_to_json(d);
+  EXPECT_NE(j.find("\"plan_command\": \"kincal plan --effects"), std::string::npos);
+  EXPECT_NE(ki::diagnosis_report_html(d).find("kincal plan --effects"), std::string::npos);
+}
+
 TEST(Diagnosis, JsonCarriesTheContractKeys) {
   const std::string j = ki::diagnosis_to_json(clean_diagnosis("stewart"));
   for (const char* key : {"\"noise_um\"", "\"rms_um\"", "\"ranking\"", "\"accepted\"", "\"verdict\"", "\"final_rms_um\"",

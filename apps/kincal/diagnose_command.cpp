@@ -99,6 +99,11 @@ int run_diagnose(const DiagnoseArgs& a) {
     std::cout << ": F = " << t.score << ", p(Holm) = " << t.p_adjusted << ", test RMS -> " << um(t.rms_after.test)
               << ", confounded " << std::fixed << std::setprecision(1) << t.confounded * 100 << std::defaultfloat
               << std::setprecision(6) << " %\n";
+    if (t.plan_confounded >= 0)
+      std::cout << "    " << t.effect << " can hardly be told from the base on these poses; poses planned for it "
+                << "(kincal plan --effects " << t.plan_effects << " --count " << t.plan_count << ") bring its confounding to "
+                << std::fixed << std::setprecision(1) << 100 * t.plan_confounded << std::defaultfloat
+                << std::setprecision(6) << " %\n";
   }
   std::cout << "  verdict: " << d.verdict << "; final RMS cal " << um(d.final_rms.cal) << ", test "
             << um(d.final_rms.test) << "\n";

@@ -55,6 +55,14 @@ struct EffectTest {
   double test_gain = 0;      // 1 − rms_after.test / rms_before.test (0 if no test rows)
   bool accepted = false;
   int step = 0;              // stepwise step at which it was ranked (1-based)
+  // Where confounded > 0.9: the confounding that measuring a plan of as many
+  // poses (at most 150) made for the confounded effects would leave
+  // (`kincal plan --effects plan_effects --count plan_count`, estimated by a
+  // greedy plan on 300 workspace candidates: identify/plan.hpp); < 0 when
+  // not computed.
+  double plan_confounded = -1;
+  std::size_t plan_count = 0;
+  std::string plan_effects;  // comma separated
 };
 
 struct DiagnosisStep {

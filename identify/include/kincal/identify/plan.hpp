@@ -62,6 +62,7 @@ struct PlanOptions {
   double noise_rad = 0;     // σ of each measured angle (pose measurement); 0: noise_mm / 200 mm
   double prior_mm = 1.0;    // the prior: each parameter moves the measured points by this, RMS over the workspace
   int max_exchange_passes = 20;
+  bool compare = true;  // also assess the grid and a random design of the same size
   std::function<void(const std::string&)> progress;
 };
 
