@@ -16,6 +16,7 @@
 #include "kincal/core/compensation.hpp"
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/diagnosis.hpp"
+#include "kincal/identify/plan.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -424,7 +425,8 @@ TEST(Diagnosis, FewerNodesThanParametersIsAClearError) {
 // of as many poses for it would leave, from a plan computed by
 // identify/plan.hpp; an effect below 90 % gets none.
 TEST(Diagnosis, AConfoundedEffectIsPointedToAPlan) {
-  const ki::Diagnosis& d = clean_diagnosis("hybrid");
+  ki::Diagnosis d = clean_diagnosis("hybrid");
+  ki::add_plan_hints(machine("hybrid").nominal, d);
   bool compliance = false;
   for (const ki::EffectTest& t : d.ranking) {
     if (!t.testable) continue;

@@ -11,6 +11,7 @@
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/files.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/plan.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace ki = kincal::identify;
@@ -76,7 +77,8 @@ int run_diagnose(const DiagnoseArgs& a) {
   opt.keep_outliers = a.keep_outliers;
   if (!a.effects.empty()) opt.candidates = effect_list(a.effects);
 
-  const ki::Diagnosis d = ki::diagnose(robot, data, opt);
+  ki::Diagnosis d = ki::diagnose(robot, data, opt);
+  ki::add_plan_hints(robot, d);  // what planned poses would do for an effect the data cannot tell from the base
   ki::OutputFiles outputs(inputs);
   outputs.add(a.json, ki::diagnosis_to_json(d));
   if (!a.report.empty()) outputs.add(a.report, ki::diagnosis_report_html(d));
@@ -99,11 +101,18 @@ int run_diagnose(const DiagnoseArgs& a) {
     std::cout << ": F = " << t.score << ", p(Holm) = " << t.p_adjusted << ", test RMS -> " << um(t.rms_after.test)
               << ", confounded " << std::fixed << std::setprecision(1) << t.confounded * 100 << std::defaultfloat
               << std::setprecision(6) << " %\n";
-    if (t.plan_confounded >= 0)
-      std::cout << "    " << t.effect << " can hardly be told from the base on these poses; poses planned for it "
-                << "(kincal plan --effects " << t.plan_effects << " --count " << t.plan_count << ") bring its confounding to "
-                << std::fixed << std::setprecision(1) << 100 * t.plan_confounded << std::defaultfloat
-                << std::setprecision(6) << " %\n";
+    if (t.plan_confounded >= 0) {
+      std::ostringstream share;
+      share << std::fixed << std::setprecision(1) << 100 * t.plan_confounded << " %";
+      const std::string command =
+          "kincal plan --effects " + t.plan_effects + " --count " + std::to_string(t.plan_count);
+      if (t.plan_confounded < 0.9)
+        std::cout << "    " << t.effect << " can hardly be told from the base on these poses; poses planned for it ("
+                  << command << ") bring its confounding to " << share.str() << "\n";
+      else
+        std::cout << "    " << t.effect << " can hardly be told from the base on these poses, and a plan for it ("
+                  << command << ") still leaves " << share.str() << ": the workspace hardly separates it\n";
+    }
   }
   std::cout << "  verdict: " << d.verdict << "; final RMS cal " << um(d.final_rms.cal) << ", test "
             << um(d.final_rms.test) << "\n";

@@ -176,6 +176,22 @@ int run_plan(const PlanArgs& a) {
   row("predicted held-out error", [](const ki::DesignAssessment& d) { return fixed(d.predicted_test_um, 2) + " um"; });
   std::cout << "  largest length standard error: planned " << worst_length(plan.planned);
   if (grid) std::cout << ", grid " << worst_length(plan.grid_assessment);
+  // Every parameter's predicted standard error, planned | grid, three to a
+  // line; '*' marks one the data leave to the prior (not determined).
+  std::cout << "\n  predicted standard errors, planned | grid (um for mm, urad for rad; * = not determined):";
+  for (std::size_t i = 0; i < plan.planned.parameter_errors.size(); ++i) {
+    const auto text = [](const ki::PlanParameter& q) {
+      const double v = q.unit == "mm" ? 1e3 * q.standard_error : q.unit == "rad" ? 1e6 * q.standard_error
+                                                                                  : q.standard_error;
+      std::ostringstream s;
+      s << std::setprecision(3) << v << (q.determined ? "" : "*");
+      return s.str();
+    };
+    const ki::PlanParameter& q = plan.planned.parameter_errors[i];
+    std::cout << (i % 3 == 0 ? "\n   " : "") << " " << std::left << std::setw(16) << q.name << std::right << std::setw(10)
+              << text(q) << " |" << std::setw(10)
+              << (grid ? text(plan.grid_assessment.parameter_errors[i]) : std::string("-"));
+  }
   std::cout << "\n  (held-out error: RMS position error of the identified model from the noise, at "
             << plan.evaluation_poses << (a.test > 0 ? " test poses" : " workspace poses") << ")\n";
   for (const std::string& n : plan.notes) std::cout << "  note: " << n << "\n";

@@ -33,7 +33,6 @@
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
-#include "kincal/identify/plan.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 
@@ -869,36 +868,6 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
       const PoseRow& row = data.rows[n.row];
       for (Index k = 0; k < n.r.size(); ++k) d.final_problem.row_node.push_back(Index(b));
       d.cal_nodes.push_back({row.id, row.line, 0.0, 1.0, true, false});
-    }
-  }
-  // Effects the poses cannot tell from the base: what a plan for them would
-  // do (issue #15), by one quick greedy plan of as many poses for all of them.
-  {
-    PlanOptions po;
-    for (const EffectTest& t : d.ranking)
-      if (t.testable && t.confounded > 0.9 && t.effect != "thermal") po.effects.push_back(t.effect);
-    // As many poses as measured, at most 150 (the hint's cost stays bounded
-    // on large data sets), from 300 workspace candidates.
-    po.count = std::min<std::size_t>(d.rms.cal_nodes, 150);
-    po.sample_count = 300;
-    po.max_exchange_passes = 0;
-    po.compare = false;
-    po.noise_mm = d.noise_um > 0 ? d.noise_um * 1e-3 : 0.005;
-    if (!po.effects.empty() && po.count > 0) {
-      try {
-        const MeasurementPlan plan = plan_measurements(robot, po);
-        std::string list;
-        for (const std::string& e : plan.effects) list += (list.empty() ? "" : ",") + e;
-        for (EffectTest& t : d.ranking)
-          for (const PlanConfounding& c : plan.planned.confounding)
-            if (c.effect == t.effect) {
-              t.plan_confounded = c.share;
-              t.plan_count = po.count;
-              t.plan_effects = list;
-            }
-      } catch (const InputError&) {
-        // No plan of this size for this machine (too few usable poses): no hint.
-      }
     }
   }
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -61,6 +61,17 @@ struct Candidate {
 class Workspace {
  public:
   Workspace(const Robot& robot, const PlanOptions& o) : robot_(robot), margin_(o.margin) {
+    if (robot.is_stewart()) {
+      open_stewart_ = robot.stewart();
+      open_stewart_.min_length.setConstant(-1e9);
+      open_stewart_.max_length.setConstant(1e9);
+    } else {
+      open_hybrid_ = robot.hybrid();
+      open_hybrid_.min_joint.setConstant(-1e9);
+      open_hybrid_.max_joint.setConstant(1e9);
+      open_hybrid_.min_extension = 0;
+      open_hybrid_.max_extension = 1e9;
+    }
     Vec6<double> lo, hi;
     double ext_lo = 0, ext_hi = 0;
     if (robot.is_stewart()) {
@@ -103,26 +114,16 @@ class Workspace {
 
  private:
   bool check(const Pose<double>& pose, Vec6<double>& q, std::string* why, double* condition) const {
-    Mat6<double> J;
-    Status s;
+    // The IK without its Jacobian first: most sampled poses fail the limits,
+    // and that needs only the joints.
     double extension = 0;
-    double L = 1;
+    Status s;
     if (robot_.is_stewart()) {
-      StewartGeometry<double> g = robot_.stewart();
-      g.min_length.setConstant(-1e9);
-      g.max_length.setConstant(1e9);
-      s = stewart_ik(g, pose, q, &J);
-      L = g.characteristic_length;
+      s = stewart_ik(open_stewart_, pose, q);
     } else {
-      HybridGeometry<double> g = robot_.hybrid();
-      g.min_joint.setConstant(-1e9);
-      g.max_joint.setConstant(1e9);
-      g.min_extension = 0;
-      g.max_extension = 1e9;
       HybridPassive<double> passive;
-      s = hybrid_ik(g, pose, q, &J, &passive);
+      s = hybrid_ik(open_hybrid_, pose, q, nullptr, &passive);
       extension = passive.extension;
-      L = g.characteristic_length;
     }
     if (s != Status::Ok) {
       if (why) *why = std::string("IK: ") + to_string(s);
@@ -137,6 +138,14 @@ class Workspace {
     if (ext_bounded_ && (extension < ext_lo_ || extension > ext_hi_)) {
       if (why) *why = "UP extension " + fixed(extension, 3) + " mm outside [" + fixed(ext_lo_, 3) + ", " + fixed(ext_hi_, 3) +
             "] (the limits less the margin)";
+      return false;
+    }
+    Mat6<double> J;
+    Vec6<double> q_again;
+    const double L = robot_.is_stewart() ? open_stewart_.characteristic_length : open_hybrid_.characteristic_length;
+    s = robot_.is_stewart() ? stewart_ik(open_stewart_, pose, q_again, &J) : hybrid_ik(open_hybrid_, pose, q_again, &J);
+    if (s != Status::Ok) {
+      if (why) *why = std::string("IK: ") + to_string(s);
       return false;
     }
     // J = ∂q/∂twist; angles in units of L so its condition number is unit-free.
@@ -155,6 +164,8 @@ class Workspace {
   }
 
   const Robot& robot_;
+  StewartGeometry<double> open_stewart_;  // the geometry with its limits opened (checked here, with the margin)
+  HybridGeometry<double> open_hybrid_;
   double margin_;
   Vec6<double> lo_, hi_, range_;
   std::array<bool, 6> bounded_{};
@@ -980,6 +991,32 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   }
   plan.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return plan;
+}
+
+void add_plan_hints(const Robot& robot, Diagnosis& d) {
+  PlanOptions po;
+  for (const EffectTest& t : d.ranking)
+    if (t.testable && t.confounded > 0.9 && t.effect != "thermal") po.effects.push_back(t.effect);
+  po.count = std::min<std::size_t>(d.rms.cal_nodes, 150);
+  po.sample_count = 2 * po.count;
+  po.max_exchange_passes = 0;
+  po.compare = false;
+  po.noise_mm = d.noise_um > 0 ? d.noise_um * 1e-3 : 0.005;
+  if (po.effects.empty() || po.count == 0) return;
+  try {
+    const MeasurementPlan plan = plan_measurements(robot, po);
+    std::string list;
+    for (const std::string& e : plan.effects) list += (list.empty() ? "" : ",") + e;
+    for (EffectTest& t : d.ranking)
+      for (const PlanConfounding& c : plan.planned.confounding)
+        if (c.effect == t.effect) {
+          t.plan_confounded = c.share;
+          t.plan_count = po.count;
+          t.plan_effects = list;
+        }
+  } catch (const InputError&) {
+    // No plan of this size for this machine (too few usable poses): no hint.
+  }
 }
 
 }  // namespace kincal::identify

@@ -617,10 +617,11 @@ void write_ranking(std::ostringstream& h, const Diagnosis& d) {
   for (const auto& e : d.ranking)
     if (e.plan_confounded >= 0)
       h << "<p><b>" << escape(e.effect) << "</b> is " << fixed(100 * e.confounded, 1)
-        << " % confounded with the model on these poses: the data can hardly tell it from the base. Poses planned "
-           "for it (<code>kincal plan --effects "
-        << escape(e.plan_effects) << " --count " << e.plan_count << "</code>, docs/plan.md) bring that to about "
-        << fixed(100 * e.plan_confounded, 1) << " %.</p>\n";
+        << " % confounded with the model on these poses: the data can hardly tell it from the base. "
+        << (e.plan_confounded < 0.9 ? "Poses planned for it" : "A plan for it") << " (<code>kincal plan --effects "
+        << escape(e.plan_effects) << " --count " << e.plan_count << "</code>, docs/plan.md) "
+        << (e.plan_confounded < 0.9 ? "bring that to about " : "still leaves about ") << fixed(100 * e.plan_confounded, 1)
+        << (e.plan_confounded < 0.9 ? " %." : " %: the workspace hardly separates it.") << "</p>\n";
 }
 
 // ------------------------------------------------------------------- steps

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -118,5 +119,13 @@ struct MeasurementPlan {
 // target measurement on a 6-UPS whose description has no `targets`, a home
 // pose that is not usable.
 MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& options);
+
+// For a diagnosis: the effects more than 90 % confounded with the base on
+// the measured poses (thermal excepted: no pose separates it) get what one
+// quick plan of as many poses (at most 150) for all of them would leave —
+// EffectTest::plan_confounded, plan_count, plan_effects; `kincal diagnose`
+// prints it and the report shows it. A greedy plan on 300 workspace
+// candidates, no exchange: an estimate of what `kincal plan` reaches.
+void add_plan_hints(const Robot& robot, Diagnosis& diagnosis);
 
 }  // namespace kincal::identify
