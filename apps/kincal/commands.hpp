@@ -66,7 +66,7 @@ struct PlanArgs {
   std::string robot, out, effects, measure, candidates, json, grid_out;
   std::size_t count = 0, samples = 5000, test = 0;
   std::uint64_t seed = 1;
-  double noise_um = 5.0, margin = 0.05;
+  double noise_um = 5.0, noise_urad = 0, margin = 0.05;
   bool quiet = false;
 };
 CLI::App* add_plan_command(CLI::App& app, PlanArgs& args);

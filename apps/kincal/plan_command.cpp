@@ -46,6 +46,9 @@ CLI::App* add_plan_command(CLI::App& app, PlanArgs& a) {
       ->check(whole_number(0));
   p->add_option("--noise-um", a.noise_um, "sigma of a measured coordinate in um (default 5)")
       ->check(decimal(0, HUGE_VAL, true));
+  p->add_option("--noise-urad", a.noise_urad,
+                "sigma of a measured angle in urad, for --measure pose (default: the --noise-um over 200 mm)")
+      ->check(decimal(0, HUGE_VAL, true));
   p->add_option("--margin", a.margin,
                 "fraction of every joint range kept clear at both limits (default 0.05)")
       ->check(decimal(0, 0.49));
@@ -116,6 +119,7 @@ int run_plan(const PlanArgs& a) {
   o.test_count = a.test;
   o.seed = a.seed;
   o.noise_mm = a.noise_um * 1e-3;
+  o.noise_rad = a.noise_urad * 1e-6;  // 0: noise_mm / 200 mm
   o.margin = a.margin;
   if (!a.quiet) o.progress = [](const std::string& s) { std::cerr << "plan: " << s << "\n"; };
   const ki::MeasurementPlan plan = ki::plan_measurements(robot, o);

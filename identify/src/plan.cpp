@@ -548,6 +548,8 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   if (!(o.noise_mm > 0) || !std::isfinite(o.noise_mm)) throw InputError("", 0, 0, "the noise level must be positive");
   if (!(o.margin >= 0 && o.margin < 0.5)) throw InputError("", 0, 0, "the margin must lie in [0, 0.5)");
   if (!(o.prior_mm > 0)) throw InputError("", 0, 0, "the prior must be positive");
+  // Each candidate keeps its design rows (a few KiB): a million is ~10 GiB.
+  if (o.sample_count > 200000) throw InputError("", 0, 0, "at most 200000 sampled candidates (--samples)");
 
   // Effects: known, and what a plan can do for them.
   std::vector<const Effect*> effects;
