@@ -128,6 +128,26 @@ echo "   the same nodes with the compensated joint commands (seed 000 Eq. (16)):
 $kincal simulate --robot hybrid-seed000 --poses out/hybrid_test_joints.csv \
   --errors examples/hybrid-seed000/errors.csv --out out/hybrid_test_compensated.csv
 $kincal errors --data out/hybrid_test_compensated.csv | tail -n +2
+
 echo
+echo "== 4. plan the measurement: which 30 poses to measure on stewart-seed001, before the tracker is set up"
+$kincal plan --robot stewart-seed001 --count 30 --test 30 --noise-um 1 --noise-urad 5 --out out/plan_poses.csv \
+  --grid-out out/plan_grid.csv --json out/plan.json --quiet | sed -n '1,10p;/^  (held-out/p;/^wrote/p' | sed 's/^/   /'
+grep -E '^(id|T)' out/plan_poses.csv > out/plan_test_poses.csv
+echo
+echo "   the planned poses and the grid, measured (Table 3's errors, 1 um / 5 urad), identified, and the"
+echo "   plan's 30 held-out poses compensated with each model, on the erroneous machine:"
+for design in plan_poses plan_grid; do  # the plan's own poses, then the grid it compares with
+  $kincal simulate --robot stewart-seed001 --poses out/$design.csv --errors examples/seed001/errors.csv \
+    --noise-mm 0.001 --noise-rad 0.000005 --seed 2026 --out out/${design}_measured.csv > /dev/null
+  $kincal identify --robot stewart-seed001 --data out/${design}_measured.csv --out out/${design}_model.json > /dev/null
+  $kincal compensate --robot stewart-seed001 --model out/${design}_model.json --poses out/plan_test_poses.csv \
+    --out out/${design}_test_joints.csv
+  $kincal simulate --robot stewart-seed001 --poses out/${design}_test_joints.csv --errors examples/seed001/errors.csv \
+    --out out/${design}_test_reached.csv > /dev/null
+  label=planned; [ "$design" = plan_grid ] && label="grid   "
+  echo "   $label: held-out pose error $($kincal errors --data out/${design}_test_reached.csv |
+    awk '$1 == "all" { printf "%s um RMS (max %s um)\n", $5, $3 }')"
+done
 echo
 echo "== outputs in out/: measurements, models (MODEL.json), summaries (SUMMARY.json), compensated joints"
