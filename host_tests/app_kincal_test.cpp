@@ -810,6 +810,7 @@ TEST(appKincal, PlanWritesPosesInMotionOrderAndComparesWithAGrid) {
   // Two points leave the platform's rotation about their line unseen: one
   // combination of the 48 parameters is left to the prior.
   EXPECT_EQ(j["planned"]["rank"].get<int>(), 47);
+  EXPECT_TRUE(contains(r.out, "two targets do not measure the rotation about their line")) << r.out;
   EXPECT_EQ(j["parameters"].size(), 48u);
   EXPECT_LT(j["planned"]["predicted_test_position_um"].get<double>(),
             j["grid"]["predicted_test_position_um"].get<double>());

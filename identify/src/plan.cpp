@@ -889,6 +889,22 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
     return Ad;
   };
   plan.planned = assess("planned", rows_of_chosen(chosen));
+  if (plan.planned.rank < p) {
+    const std::string unseen = std::to_string(p - plan.planned.rank) + " combination" +
+                               (p - plan.planned.rank > 1 ? "s" : "") + " of the parameters";
+    const std::size_t targets = robot.targets.size();
+    if (design.measure().find("target position") != std::string::npos && targets < 3)
+      plan.notes.push_back(unseen + " no pose can show: " +
+                           (targets == 1 ? std::string("one target's position does not measure the orientation")
+                                         : std::string("two targets do not measure the rotation about their line")) +
+                           "; they are left to the prior (in the predicted errors). " +
+                           (targets == 1 ? std::string("Two more targets, not in line with it, measure them")
+                                         : std::string("A third target off that line measures them")));
+    else
+      plan.notes.push_back(unseen + " stay unseen by the planned poses; they are left to the prior (in the "
+                                    "predicted errors). More poses, or candidates that move in more ways, may "
+                                    "show them");
+  }
 
   // Random: as many pool poses drawn at random (the same seed).
   if (o.compare) {
