@@ -114,13 +114,7 @@ TEST(Plan, PosesAreReachableInsideTheLimitsLessTheMarginAndInMotionOrder) {
     std::size_t tests = 0;
     std::vector<Vec6<double>> q;
     Vec6<double> lo, hi;
-    if (robot.is_stewart()) {
-      lo = robot.stewart().min_length;
-      hi = robot.stewart().max_length;
-    } else {
-      lo = robot.hybrid().min_joint;
-      hi = robot.hybrid().max_joint;
-    }
+    robot.joint_limits(lo, hi);
     for (const ki::PoseRow& r : plan.poses.rows) {
       ids.insert(r.id);
       tests += r.role == ki::Role::Test ? 1 : 0;

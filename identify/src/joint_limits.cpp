@@ -58,13 +58,7 @@ std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTabl
     const std::string where = data.file + ":" + std::to_string(r.line) + ": warning: row '" + r.id + "': ";
     const char* tail = " (the row is used: limits bound the controller, not the measurement)";
     Vec6<double> lo, hi;
-    if (robot.is_stewart()) {
-      lo = robot.stewart().min_length;
-      hi = robot.stewart().max_length;
-    } else {
-      lo = robot.hybrid().min_joint;
-      hi = robot.hybrid().max_joint;
-    }
+    robot.joint_limits(lo, hi);
     for (int i = 0; i < 6; ++i) {
       const char* unit = robot.is_hybrid() && i >= 3 ? "rad" : "mm";
       const std::string msg = outside("q" + std::to_string(i + 1), q(i), lo(i), hi(i), unit);

@@ -22,6 +22,7 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 
 namespace kincal::identify {
@@ -61,28 +62,16 @@ struct Candidate {
 class Workspace {
  public:
   Workspace(const Robot& robot, const PlanOptions& o) : robot_(robot), margin_(o.margin) {
-    if (robot.is_stewart()) {
-      open_stewart_ = robot.stewart();
-      open_stewart_.min_length.setConstant(-1e9);
-      open_stewart_.max_length.setConstant(1e9);
-    } else {
-      open_hybrid_ = robot.hybrid();
-      open_hybrid_.min_joint.setConstant(-1e9);
-      open_hybrid_.max_joint.setConstant(1e9);
-      open_hybrid_.min_extension = 0;
-      open_hybrid_.max_extension = 1e9;
-    }
+    // The IK runs without the file's limits (joint_limits.hpp); they are
+    // checked here, less the margin.
+    if (robot.is_stewart())
+      open_stewart_ = without_limits(robot.stewart());
+    else
+      open_hybrid_ = without_limits(robot.hybrid());
     Vec6<double> lo, hi;
-    double ext_lo = 0, ext_hi = 0;
-    if (robot.is_stewart()) {
-      lo = robot.stewart().min_length;
-      hi = robot.stewart().max_length;
-    } else {
-      lo = robot.hybrid().min_joint;
-      hi = robot.hybrid().max_joint;
-      ext_lo = robot.hybrid().min_extension;
-      ext_hi = robot.hybrid().max_extension;
-    }
+    robot.joint_limits(lo, hi);
+    const double ext_lo = robot.is_hybrid() ? robot.hybrid().min_extension : 0.0;
+    const double ext_hi = robot.is_hybrid() ? robot.hybrid().max_extension : 0.0;
     for (int i = 0; i < 6; ++i) {
       const double range = hi(i) - lo(i);
       bounded_[i] = range < kUnbounded;
@@ -164,7 +153,7 @@ class Workspace {
   }
 
   const Robot& robot_;
-  StewartGeometry<double> open_stewart_;  // the geometry with its limits opened (checked here, with the margin)
+  StewartGeometry<double> open_stewart_;  // the geometry with its limits opened
   HybridGeometry<double> open_hybrid_;
   double margin_;
   Vec6<double> lo_, hi_, range_;

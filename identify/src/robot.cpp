@@ -78,6 +78,11 @@ Vec6<double> Robot::correction_bound() const {
   return v;
 }
 
+void Robot::joint_limits(Vec6<double>& lo, Vec6<double>& hi) const {
+  lo = is_stewart() ? stewart().min_length : hybrid().min_joint;
+  hi = is_stewart() ? stewart().max_length : hybrid().max_joint;
+}
+
 Status Robot::inverse(const Pose<double>& pose, Vec6<double>& q) const {
   return is_stewart() ? stewart_ik(stewart(), pose, q) : hybrid_ik(hybrid(), pose, q);
 }

@@ -80,6 +80,8 @@ struct Robot {
   Pose<double> home_pose() const;
   // max_correction, or core's default_bounds where the description has none.
   Vec6<double> correction_bound() const;
+  // The joint commands' limits (stewart: the stroke; hybrid: joint_limits).
+  void joint_limits(Vec6<double>& lo, Vec6<double>& hi) const;
   // Nominal IK (commanded joints) for a pose, in the robot's pose frame.
   Status inverse(const Pose<double>& pose, Vec6<double>& q) const;
 };
