@@ -831,3 +831,40 @@ TEST(appKincal, PlanBadInputIsOneLine) {
     EXPECT_TRUE(contains(r.err, "kincal: ")) << r.err;
   }
 }
+
+// Issue #10 item 11, the audit's findings through the tool (the library's
+// half is in identify_input_checks_test): a held-out row the model cannot be
+// evaluated at was counted silently with the rows that have no measurement;
+// absurd values in PARAMS.csv were blamed on the poses file, with no line.
+TEST(appKincal, RowsAndValuesAtFaultAreNamedWhereTheyStand) {
+  const MeasuredSet s = measured_set("placed");
+  // The last row (a held-out row of the grid) commanded at x = 1e30 mm (a blunder).
+  const std::string text = bytes_of(s.data);
+  const ki::CsvDocument doc = ki::parse_csv(text, s.data);
+  const ki::CsvRecord& last = doc.rows.back();
+  ASSERT_EQ(last.fields[std::size_t(doc.column("role"))].text, "test");
+  const std::size_t start = [&] {
+    std::size_t at = 0;
+    for (std::size_t l = 1; l < last.line; ++l) at = text.find('\n', at) + 1;
+    return at;
+  }();
+  std::string row = text.substr(start);
+  const std::size_t x0 = last.fields[std::size_t(doc.column("x"))].column - 1, x1 = row.find(',', x0);
+  row = row.substr(0, x0) + "1e30" + row.substr(x1);
+  const std::string far = write("far_test_row.csv", text.substr(0, start) + row);
+  const ToolRun id = run_tool("identify --robot stewart-seed001 --data \"" + far + "\" --out \"" + kDir + "/far_model.json\"");
+  EXPECT_EQ(id.code, 0) << id.err;
+  EXPECT_TRUE(contains(id.err, far + ":" + std::to_string(last.line) + ": warning: row '" +
+                                   last.fields[std::size_t(doc.column("id"))].text +
+                                   "': nominal IK of the commanded pose failed"))
+      << id.err;
+  EXPECT_TRUE(contains(id.out, "1 measured row(s) could not be evaluated")) << id.out;
+
+  // dl3 = 1e30 in PARAMS.csv: no pose can be simulated; the poses file was blamed.
+  const std::string errors = write("absurd_errors.csv", "name,value\ndl1,0.01\ndl3,1e30\ndXB2,0.02\n");
+  const ToolRun sim = run_tool("simulate --robot stewart-seed001 --poses \"" + kExamples + "/seed001/grid_poses.csv\" --errors \"" +
+                               errors + "\" --out \"" + kDir + "/absurd.csv\"");
+  EXPECT_EQ(sim.code, 1);
+  EXPECT_TRUE(contains(sim.err, "kincal: " + errors + ":3: the machine these errors describe reaches none")) << sim.err;
+  EXPECT_TRUE(contains(sim.err, "the largest error is dl3 = 1e+30")) << sim.err;
+}

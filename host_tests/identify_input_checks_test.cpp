@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <string>
 
+#include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -185,4 +186,90 @@ TEST(identifyInputChecks, TooFewNodesSayHowManyAreNeeded) {
   e = error_of([&] { ki::calibrate_stewart(stewart, s); });
   EXPECT_TRUE(contains(e, "only 7 calibration nodes")) << e;
   EXPECT_TRUE(contains(e, "at least 8")) << e;
+}
+
+// Item 11, the audit's last findings (scripts/error_audit.py): content errors
+// that named no position, or the wrong row. Each input is made here by hand.
+
+// A model whose table fails the machine-limit check named the table's derived
+// value and no position in MODEL.json (`kincal table`: not even the file).
+TEST(identifyInputChecks, ATableFaultNamesTheModelValueThatCausesIt) {
+  const std::string six = model_text("stewart-seed001", "\n    " + parameter("dl2", 0.01) + ",\n    " +
+                                                            parameter("dYP3", 250.0) + ",\n    " + parameter("dZB1", 0.02));
+  const ki::CalibrationModel m = ki::parse_model(six, "six.json");
+  std::string e = error_of([&] { ki::calibration_table(m); });
+  const std::size_t line = std::size_t(std::count(six.begin(), six.begin() + long(six.find("dYP3")), '\n')) + 1;
+  EXPECT_TRUE(contains(e, "six.json:" + std::to_string(line) + ":")) << e << " (line " << line << ")";
+  EXPECT_TRUE(contains(e, "outside the machine limits")) << e;
+  EXPECT_TRUE(contains(e, "it comes from dYP3 = 250")) << e;
+  // The hybrid: an encoder offset above its correction bound (5 mm) was
+  // "table values: a correction above its bound or a value out of range".
+  const std::string hyb = model_text("hybrid-seed000", "\n    " + parameter("dxi_4_4", 0.001) + ",\n    " +
+                                                           parameter("dxi_3_2", -7.5));
+  e = error_of([&] { ki::calibration_table(ki::parse_model(hyb, "hyb.json")); });
+  const std::size_t hline = std::size_t(std::count(hyb.begin(), hyb.begin() + long(hyb.find("dxi_3_2")), '\n')) + 1;
+  EXPECT_TRUE(contains(e, "hyb.json:" + std::to_string(hline) + ":")) << e << " (line " << hline << ")";
+  EXPECT_TRUE(contains(e, "encoder offset 2 = -7.5 above its correction bound 5")) << e;
+  // An effect value: at its key in "effects".
+  const std::string eff = model_text("stewart-seed001", parameter("dl1", 0.01), ",\n  \"effects\": {\"scale\": {\"s3\": 0.5}}");
+  e = error_of([&] { ki::calibration_table(ki::parse_model(eff, "eff.json")); });
+  const std::size_t eline = std::size_t(std::count(eff.begin(), eff.begin() + long(eff.find("\"s3\"")), '\n')) + 1;
+  EXPECT_TRUE(contains(e, "eff.json:" + std::to_string(eline) + ":")) << e;
+  EXPECT_TRUE(contains(e, "it comes from scale:s3 = 0.5")) << e;
+  // A good model makes its table.
+  EXPECT_NO_THROW(ki::calibration_table(ki::parse_model(model_text("stewart-seed001", parameter("dl1", 0.01)), "ok.json")));
+}
+
+TEST(identifyInputChecks, JsonNumbersOutOfRangeAndNegativeStandardErrorsArePlaced) {
+  std::string text = model_text("stewart-seed001", "\n    {\"name\": \"dl1\", \"value\": 1e999}");
+  std::string e = error_of([&] { ki::parse_model(text, "m.json"); });
+  const std::size_t line = std::size_t(std::count(text.begin(), text.begin() + long(text.find("1e999")), '\n')) + 1;
+  EXPECT_TRUE(contains(e, "m.json:" + std::to_string(line) + ":")) << e;
+  EXPECT_TRUE(contains(e, "number overflow parsing '1e999'")) << e;
+  // The same characters in a string come first in the text and are not the
+  // number at fault.
+  text = model_text("stewart-seed001", "\n    {\"name\": \"dl2\", \"value\": 2, \"note\": \"x 1e999 y\"}," +
+                                           std::string("\n    {\"name\": \"dl1\", \"value\": 1e999}"));
+  e = error_of([&] { ki::parse_model(text, "m.json"); });
+  const std::size_t at = text.rfind("1e999"), start = text.rfind('\n', at) + 1;
+  EXPECT_TRUE(contains(e, "m.json:" + std::to_string(line + 1) + ":" + std::to_string(at - start + 1) + ":")) << e;
+  e = error_of([&] { ki::parse_model(model_text("stewart-seed001", "{\"name\": \"dl1\", \"value\": 0.1, \"standard_error\": -2}"), "m.json"); });
+  EXPECT_TRUE(contains(e, "standard_error of dl1 is negative")) << e;
+  EXPECT_TRUE(contains(e, "m.json:")) << e;
+}
+
+// A gauge target read as 1e30 mm pulled seed 000's coarse stage until the FK
+// of another node failed, and the message named that node without a line.
+TEST(identifyInputChecks, AGaugeBlunderIsRefusedAtItsRow) {
+  const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
+  ki::PoseTable poses;
+  poses.file = "g.csv";
+  for (int k = 0; k < 20; ++k) {
+    ki::PoseRow r;
+    r.id = "g" + std::to_string(k);
+    r.line = std::size_t(k) + 2;
+    r.commanded << -200 + 21 * k, 150 - 17 * (k % 7), -40 + 4 * k, 0, 0, 0;
+    poses.rows.push_back(r);
+  }
+  ki::SimulateReport rep;
+  ki::PoseTable h = ki::simulate(hybrid, hybrid, poses, ki::SimulateOptions{}, rep, nullptr);
+  ASSERT_EQ(rep.simulated, 20u);
+  (*h.rows[13].targets)(1, 2) += 400.0;  // t3y off by 400 mm: a mis-read digit, not a mis-seated target
+  const std::string e = error_of([&] { ki::calibrate_hybrid(hybrid, h); });
+  EXPECT_TRUE(contains(e, "g.csv:15: row 'g13': measured targets t2 and t3 are")) << "[" << e << "]";
+  // A target mis-seated by 2 mm is the outlier screen's, not a refusal.
+  h.rows[13].targets = ki::simulate(hybrid, hybrid, poses, ki::SimulateOptions{}, rep, nullptr).rows[13].targets;
+  (*h.rows[13].targets)(1, 2) += 2.0;
+  EXPECT_EQ(error_of([&] { ki::calibrate_hybrid(hybrid, h); }), "");
+}
+
+// rz = 1e30 parsed; the identification then reported a rank-deficient design.
+TEST(identifyInputChecks, AnglesAreRadiansOfOneTurnAtMost) {
+  const std::string head = "id,x,y,z,rx,ry,rz,mx,my,mz,mrx,mry,mrz\n";
+  std::string e = error_of([&] { ki::parse_pose_table(head + "a,0,0,200,0,0,1e30,0,0,200,0,0,0\n", "p.csv"); });
+  EXPECT_TRUE(contains(e, "p.csv:2:15: angle '1e30' in column 'rz' is more than a turn")) << e;
+  e = error_of([&] { ki::parse_pose_table(head + "a,0,0,200,0,0,0,0,0,200,30,0,0\n", "p.csv"); });
+  EXPECT_TRUE(contains(e, "column 'mrx'")) << e;
+  // A turn is allowed, and negative angles.
+  EXPECT_EQ(error_of([&] { ki::parse_pose_table(head + "a,0,0,200,-3.1,6.28,0,0,0,200,0,0,-6.2\n", "p.csv"); }), "");
 }

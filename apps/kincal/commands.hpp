@@ -12,6 +12,7 @@
 
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -37,6 +38,10 @@ kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& rob
 // robot's correction bound on the measured poses (issue #11 item 3), naming
 // the key that raises it.
 void warn_correction_need(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
+
+// One warning per measured row the model could not be evaluated at (a test
+// row whose commanded pose is out of reach), at its line.
+void warn_unevaluated(const std::string& file, const kincal::identify::PoseErrorReport& report);
 
 // The outlier screen (identify/outliers.hpp) as every command reports it:
 // the flagged nodes with file line and statistic, and what was done with

@@ -125,6 +125,12 @@ void kincal_app::warn_correction_need(const ki::CalibrationModel& model, const k
   if (!w.empty()) warn(data.file + ": warning: " + w);
 }
 
+void kincal_app::warn_unevaluated(const std::string& file, const ki::PoseErrorReport& report) {
+  for (const ki::UnevaluatedRow& r : report.unevaluated)
+    warn(file + ":" + std::to_string(r.line) + ": warning: row '" + r.id + "': " + r.why +
+         "; its residual is left out of the tables");
+}
+
 void kincal_app::print_outliers(const std::string& file, const ki::OutlierScreen& screen, std::size_t nodes, bool keep) {
   if (screen.flagged.empty()) {
     std::cout << "  outliers: none (deleted-node F test, p < " << screen.p_threshold << ")\n";
@@ -188,6 +194,23 @@ int run_simulate(const SimulateArgs& a) {
   sopt.effects = effects;
   ki::SimulateReport report;
   const ki::PoseTable out = ki::simulate(nominal, actual, poses, sopt, report, warn);
+  if (report.simulated == 0 && !errors.values.empty()) {
+    // The poses may be fine and the errors absurd: if the machine without
+    // them reaches the poses, the fault is in PARAMS.csv, at its largest value.
+    ki::SimulateReport without;
+    ki::simulate(nominal, nominal, poses, sopt, without);
+    if (without.simulated > 0) {
+      const auto largest = std::max_element(errors.values.begin(), errors.values.end(), [](const auto& x, const auto& y) {
+        return std::abs(x.value) < std::abs(y.value);
+      });
+      std::ostringstream value;
+      value << largest->value;
+      throw ki::InputError(errors.file, largest->line, 0,
+                           "the machine these errors describe reaches none of the " + std::to_string(report.failed) +
+                               " poses (the nominal machine reaches " + std::to_string(without.simulated) +
+                               "); the largest error is " + largest->name + " = " + value.str());
+    }
+  }
   if (report.simulated == 0)
     throw ki::InputError(a.poses, 0, 0,
                          "no row could be simulated (" + std::to_string(report.failed) + " rows failed); nothing written");
@@ -386,6 +409,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   const ki::HybridCompensation comp = used.compensation();
   const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
   const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
+  kincal_app::warn_unevaluated(a.data, after);
   std::cout << "\nresiduals before calibration (pose error from the gauge, measured - nominal model):\n";
   ki::print_pose_error_report(before, std::cout, false);
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
@@ -476,6 +500,7 @@ int run_identify(const IdentifyArgs& a) {
   outputs.add(a.out, ki::model_to_json(model));
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
   const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
+  kincal_app::warn_unevaluated(a.data, after);
   std::cout << "\nresiduals before calibration (measured - nominal model):\n";
   ki::print_pose_error_report(before, std::cout, false);
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
@@ -528,6 +553,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   try {
     table = ki::calibration_table(model);
   } catch (const ki::InputError& e) {
+    if (!e.file().empty()) throw;  // placed at the value at fault in MODEL.json
     throw ki::InputError(model_path, 0, 0, e.message());
   }
   ki::PoseTableOptions options;

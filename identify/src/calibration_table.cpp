@@ -14,22 +14,6 @@ namespace kincal::identify {
 
 namespace {
 
-template <class Machine>
-void finish(CalibrationTable<Machine>& t, const CalibrationModel& model, const CalibrationTableOptions& options) {
-  t.effects = to_table(model.effects.to_core(model.nominal));
-  const Vec6<double> bound = options.max_correction ? *options.max_correction : model.nominal.correction_bound();
-  for (int i = 0; i < 6; ++i) t.bounds.max_correction[i] = bound(i);
-  t = seal_table(t);
-  const MachineLimits<double> limits = machine_limits(model.nominal, options);
-  const CompensationStatus st = validate_table(t, limits);
-  if (st == CompensationStatus::TableLimits)
-    throw InputError("the calibration table is outside the machine limits: " +
-                     limit_violation(AnyCalibrationTable(t), limits));
-  if (st != CompensationStatus::Ok)
-    throw InputError(std::string("the calibration table fails its check (") + to_string(st) +
-                     "): a correction above its bound or a value out of range");
-}
-
 std::string number(double v) {
   std::ostringstream s;
   s.precision(6);
@@ -46,6 +30,36 @@ std::string above(const char* name, const double (&values)[N], double cap, const
       return std::string(name) + "[" + std::to_string(k) + "] = " + number(v) + " above " + cap_name + " " + number(cap);
   }
   return {};
+}
+
+// Why validate_table found a value out of range (TableValues) where a model
+// can cause it: the hybrid's encoder offsets, one correction at every point.
+template <class Machine> std::string value_violation(const CalibrationTable<Machine>& t) {
+  if constexpr (Machine::family == MachineFamily::Hybrid) {
+    for (int i = 0; i < 6; ++i)
+      if (!(std::abs(t.machine.encoder_offsets[i]) <= t.bounds.max_correction[i]))
+        return "encoder offset " + std::to_string(i + 1) + " = " + number(t.machine.encoder_offsets[i]) +
+               " above its correction bound " + number(t.bounds.max_correction[i]);
+  }
+  return "a correction above its bound or a value out of range";
+}
+
+// Fills the effects and bounds, seals the table and checks it against the
+// machine limits of the model's nominal robot: the status, and why in words.
+template <class Machine>
+CompensationStatus finish(CalibrationTable<Machine>& t, const CalibrationModel& model,
+                          const CalibrationTableOptions& options, std::string* why) {
+  t.effects = to_table(model.effects.to_core(model.nominal));
+  const Vec6<double> bound = options.max_correction ? *options.max_correction : model.nominal.correction_bound();
+  for (int i = 0; i < 6; ++i) t.bounds.max_correction[i] = bound(i);
+  t = seal_table(t);
+  const MachineLimits<double> limits = machine_limits(model.nominal, options);
+  const CompensationStatus st = validate_table(t, limits);
+  if (why != nullptr && st == CompensationStatus::TableLimits)
+    *why = "the calibration table is outside the machine limits: " + limit_violation(AnyCalibrationTable(t), limits);
+  else if (why != nullptr && st != CompensationStatus::Ok)
+    *why = std::string("the calibration table fails its check (") + to_string(st) + "): " + value_violation(t);
+  return st;
 }
 
 }  // namespace
@@ -108,20 +122,22 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
       any);
 }
 
-StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
-                                                          const CalibrationTableOptions& options) {
+namespace {
+
+StewartCalibrationTable<double> stewart_table(const CalibrationModel& model, const CalibrationTableOptions& options,
+                                              CompensationStatus& status, std::string* why) {
   if (!model.nominal.is_stewart()) throw InputError("a 6-UPS calibration table needs a model of a 6-UPS robot");
   const StewartGeometry<double>& nominal = model.nominal.stewart();
   StewartCalibrationTable<double> t{};
   t.machine.nominal = to_table(nominal);
   t.machine.calibrated = to_table(calibrated_robot(model).stewart());  // seed 001: IK of the calibrated geometry
   t.bounds = default_bounds(nominal);
-  finish(t, model, options);
+  status = finish(t, model, options, why);
   return t;
 }
 
-HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& model,
-                                                        const CalibrationTableOptions& options) {
+HybridCalibrationTable<double> hybrid_table(const CalibrationModel& model, const CalibrationTableOptions& options,
+                                            CompensationStatus& status, std::string* why) {
   if (!model.nominal.is_hybrid()) throw InputError("a hybrid calibration table needs a model of a hybrid robot");
   const HybridCompensation c = hybrid_compensation_from_model(model);
   HybridCalibrationTable<double> t{};
@@ -131,7 +147,84 @@ HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& 
   for (int k = HybridErrorModel::kEncoderCount; k < kHybridSourceErrorCount; ++k)
     t.machine.source_errors[k] = c.structural.size() > 0 ? c.structural(k) : 0.0;
   t.bounds = default_bounds(c.nominal);
-  finish(t, model, options);
+  status = finish(t, model, options, why);
+  return t;
+}
+
+// Whether the model's table passes its check (no message built).
+bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& options) {
+  CompensationStatus st = CompensationStatus::Ok;
+  try {
+    if (model.nominal.is_hybrid())
+      hybrid_table(model, options, st, nullptr);
+    else
+      stewart_table(model, options, st, nullptr);
+  } catch (const InputError&) {
+    return false;
+  }
+  return st == CompensationStatus::Ok;
+}
+
+// A table that fails its check, reported where the user can mend it: the
+// first value of the model (a parameter, then an effect parameter) whose
+// table alone — every other value nominal — fails too, at its line and
+// column in the MODEL.json it was read from (issue #10 item 11). A fault only
+// the values together make names the file alone.
+[[noreturn]] void throw_table_fault(const CalibrationModel& model, const CalibrationTableOptions& options,
+                                    const std::string& why) {
+  CalibrationModel alone = model;
+  alone.parameters.clear();
+  alone.effects = {};
+  std::string culprit;
+  double value = 0;
+  for (const ModelParameter& p : model.parameters) {
+    alone.parameters = {p};
+    if (!table_ok(alone, options)) {
+      culprit = p.name;
+      value = p.value;
+      break;
+    }
+  }
+  alone.parameters.clear();
+  for (const auto& [effect, values] : model.effects.values) {
+    const Effect* e = find_effect(effect);
+    if (!culprit.empty() || e == nullptr) break;
+    const std::vector<std::string> names = e->parameter_names(model.nominal);
+    for (std::size_t i = 0; i < names.size() && culprit.empty() && Eigen::Index(i) < values.size(); ++i) {
+      alone.effects = {};
+      alone.effects.set(model.nominal, effect, names[i], values(Eigen::Index(i)));
+      if (!table_ok(alone, options)) {
+        culprit = effect + ":" + names[i];
+        value = values(Eigen::Index(i));
+      }
+    }
+  }
+  const auto at = model.value_positions.find(culprit);
+  if (culprit.empty() || at == model.value_positions.end())
+    throw InputError(model.source_file, 0, 0,
+                     why + (culprit.empty() ? std::string(" (no single value causes it: the values together do)")
+                                            : "; it comes from " + culprit));
+  throw InputError(model.source_file, at->second.line, at->second.column,
+                   why + "; it comes from " + culprit + " = " + number(value));
+}
+
+}  // namespace
+
+StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
+                                                          const CalibrationTableOptions& options) {
+  CompensationStatus st = CompensationStatus::Ok;
+  std::string why;
+  const StewartCalibrationTable<double> t = stewart_table(model, options, st, &why);
+  if (st != CompensationStatus::Ok) throw_table_fault(model, options, why);
+  return t;
+}
+
+HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& model,
+                                                        const CalibrationTableOptions& options) {
+  CompensationStatus st = CompensationStatus::Ok;
+  std::string why;
+  const HybridCalibrationTable<double> t = hybrid_table(model, options, st, &why);
+  if (st != CompensationStatus::Ok) throw_table_fault(model, options, why);
   return t;
 }
 

@@ -213,6 +213,21 @@ struct Group {
   }
 };
 
+// A pose's angles (the last three of x, y, z, rx, ry, rz) are radians of one
+// turn at most: 1e30 rad parses, but its sine is rounding noise, and the
+// identification then reported a rank-deficient design instead of the row.
+// A value like 30 for rx is degrees given where radians belong.
+void require_turn(const std::vector<double>& pose, const Group& g, const CsvRecord& r, const std::string& file) {
+  constexpr double kTurn = 6.283185307179586;
+  for (std::size_t k = 3; k < 6; ++k)
+    if (!(std::abs(pose[k]) <= kTurn)) {
+      const CsvField& f = r.fields[static_cast<std::size_t>(g.index[k])];
+      throw InputError(file, r.line, f.column,
+                       "angle " + quoted(f.text) + " in column '" + g.names[k] +
+                           "' is more than a turn (2 pi rad): angles are in radians");
+    }
+}
+
 std::vector<std::string> numbered(const std::string& prefix, int n, const std::string& suffix = "") {
   std::vector<std::string> out;
   for (int i = 1; i <= n; ++i) out.push_back(prefix + std::to_string(i) + suffix);
@@ -286,6 +301,7 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
                        "duplicate id " + quoted(idf.text) + " (first at line " + std::to_string(it->second) + ")");
     row.id = idf.text;
     const std::vector<double> c = pose.numbers(r, file);
+    require_turn(c, pose, r, file);
     row.commanded = Eigen::Map<const Vec6<double>>(c.data());
     if (status.present) {
       row.status = r.fields[static_cast<std::size_t>(status.index[0])].text;
@@ -295,6 +311,7 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
     const bool failed = status.present && row.status != "ok";
     if (measured.present && !(failed && measured.empty_in(r))) {
       const std::vector<double> m = measured.numbers(r, file);
+      require_turn(m, measured, r, file);
       row.measured = Eigen::Map<const Vec6<double>>(m.data());
     }
     if (targets.present && !(failed && targets.empty_in(r))) {

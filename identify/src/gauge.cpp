@@ -1,5 +1,7 @@
 #include "kincal/identify/gauge.hpp"
 
+#include <cmath>
+#include <sstream>
 #include <string>
 
 #include "kincal/identify/input_error.hpp"
@@ -69,6 +71,26 @@ Eigen::MatrixXd identification_jacobian(const HybridErrorModel& model, Measureme
   Eigen::MatrixXd H;
   identification_jacobian(model, kind, radius, nodes, H);
   return H;
+}
+
+void require_gauge_triangles(const PoseTable& data, double radius) {
+  const double side = std::sqrt(3.0) * radius;
+  for (const PoseRow& row : data.rows) {
+    if (!row.targets) continue;
+    const Eigen::Matrix<double, 3, 3>& t = *row.targets;
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3;
+      const double d = (t.col(a) - t.col(b)).norm();
+      if (!(std::abs(d - side) <= 0.1 * side)) {
+        std::ostringstream msg;
+        msg << "row '" << row.id << "': measured targets t" << a + 1 << " and t" << b + 1 << " are " << d
+            << " mm apart, the gauge's are " << side << " mm (radius " << radius
+            << " mm in the robot description): a blunder in t" << a + 1 << " or t" << b + 1
+            << " (correct it or drop the row)";
+        throw InputError(data.file, row.line, 0, msg.str());
+      }
+    }
+  }
 }
 
 std::vector<Pose<double>> translation_grid(const std::vector<double>& layers, int L, double half_width,

@@ -80,8 +80,10 @@ Pose<double> predict(const HybridGeometry<double>& g, const Node& n, const std::
   Pose<double> tool;
   const auto rep = hybrid_fk(g, n.q, n.guess, tool);
   if (rep.status != Status::Ok)
-    throw InputError(file, 0, 0,
-                     "hybrid calibration: FK of node '" + n.id + "' failed (" + to_string(rep.status) + ")");
+    throw InputError(file, n.line, 0,
+                     "row '" + n.id + "': the machine estimated so far cannot reach this node's commands (FK " +
+                         to_string(rep.status) + "); check the row, and the others for a blunder that pulls the "
+                         "estimate away");
   return tool;
 }
 
@@ -181,6 +183,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // the result keeps the robot's own (out.nominal, the compensation).
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   const double radius = nominal.gauge_radius;
+  require_gauge_triangles(data, radius);
   const std::vector<Node> nodes = gauge_nodes(g0, data, [](const PoseRow& row) { return row.role == Role::Cal; });
   const Index N = static_cast<Index>(nodes.size());
   // The fine stage identifies up to ~54 source errors (seed 000 Sec. 4.1; 48
@@ -749,6 +752,7 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
   MatrixXd B(6, HybridErrorModel::kParameterCount);
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;
+  std::vector<UnevaluatedRow> unevaluated;
   for (const PoseRow& row : data.rows) {
     if (!row.targets || !usable_status(row.status)) {
       ++skipped;
@@ -761,19 +765,19 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     if (row.q && row.q->size() == 6) {
       q = *row.q;
     } else if (ik != Status::Ok) {
-      ++skipped;
+      unevaluated.push_back({row.id, row.line, "nominal IK of the commanded pose failed (" + std::string(to_string(ik)) + ")"});
       continue;
     }
     Pose<double> predicted;
-    if (hybrid_fk(g, q, guess, predicted).status != Status::Ok) {
-      ++skipped;
+    if (const Status fk = hybrid_fk(g, q, guess, predicted).status; fk != Status::Ok) {
+      unevaluated.push_back({row.id, row.line, "FK of the model failed (" + std::string(to_string(fk)) + ")"});
       continue;
     }
     if (structural) {
       // The model's twist at the pose the ideal machine reaches (as the fine
       // stage and the compensation's fixed point put it).
-      if (compensation->model->error_jacobian(predicted, B) != Status::Ok) {
-        ++skipped;
+      if (const Status st = compensation->model->error_jacobian(predicted, B); st != Status::Ok) {
+        unevaluated.push_back({row.id, row.line, "the model's error twist failed (" + std::string(to_string(st)) + ")"});
         continue;
       }
       predicted = apply_twist(predicted, Twist<double>(B * compensation->structural));
@@ -789,7 +793,9 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     r.error = P.colPivHouseholderQr().solve(dp);
     rows.push_back(r);
   }
-  return make_pose_error_report(std::move(rows), skipped);
+  PoseErrorReport report = make_pose_error_report(std::move(rows), skipped);
+  report.unevaluated = std::move(unevaluated);
+  return report;
 }
 
 }  // namespace kincal::identify

@@ -157,6 +157,54 @@ void check_json_depth(std::string_view text, const std::string& file, int max_de
   }
 }
 
+nlohmann::json parse_json_text(const std::string& text, const std::string& file) {
+  check_json_depth(text, file);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // e.byte is 1-based: the byte at which the parser stopped.
+    const TextPosition p = position_of(text, e.byte > 0 ? e.byte - 1 : 0);
+    std::string what = e.what();
+    // "[json.exception.parse_error.101] parse error at line 1, column 2: syntax error while ..." → the tail.
+    const std::size_t colon = what.find(": ");
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    throw InputError(file, p.line, p.column, "malformed JSON: " + what);
+  } catch (const nlohmann::json::exception& e) {
+    // out_of_range.406 "number overflow parsing '1e999'" carries no byte
+    // position: point at the number, the first occurrence of the quoted
+    // token outside strings that is a whole number (not part of a longer one).
+    std::string what = e.what();
+    const std::size_t bracket = what.find("] ");
+    if (bracket != std::string::npos) what = what.substr(bracket + 2);
+    std::size_t at = 0;
+    const std::size_t q1 = what.find('\''), q2 = what.rfind('\'');
+    if (q1 != std::string::npos && q2 > q1) {
+      const std::string token = what.substr(q1 + 1, q2 - q1 - 1);
+      const auto numeric = [](char c) {
+        return (c >= '0' && c <= '9') || c == '.' || c == 'e' || c == 'E' || c == '+' || c == '-';
+      };
+      bool in_string = false;
+      for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+          if (c == '\\')
+            ++i;
+          else if (c == '"')
+            in_string = false;
+        } else if (c == '"') {
+          in_string = true;
+        } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !numeric(text[i - 1])) &&
+                   (i + token.size() == text.size() || !numeric(text[i + token.size()]))) {
+          at = i;
+          break;
+        }
+      }
+    }
+    const TextPosition p = position_of(text, at);
+    throw InputError(file, p.line, p.column, "invalid JSON value: " + what + " (numbers must be finite doubles)");
+  }
+}
+
 JsonLocations locate_json(std::string_view text) {
   JsonLocations out;
   Walker(text, out).run();

@@ -10,6 +10,8 @@
 #include <string_view>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace kincal::identify::detail {
 
 struct JsonLocations {
@@ -35,6 +37,13 @@ JsonLocations locate_json(std::string_view text);
 // ~3 000 deep overflowed the stack in json::dump()): InputError at the line and
 // column of the first bracket too deep. Strings are skipped.
 void check_json_depth(std::string_view text, const std::string& file, int max_depth = 64);
+
+// The one way identify/ reads a JSON text (robot descriptions, MODEL.json):
+// check_json_depth, then nlohmann's parser, every failure an InputError at
+// the line and column where the text goes wrong — a syntax error where the
+// parser stopped, a number that does not fit a double ("1e999": nlohmann
+// gives no position) at the number itself.
+nlohmann::json parse_json_text(const std::string& text, const std::string& file);
 
 std::string child_path(const std::string& parent, const std::string& key);
 std::string child_path(const std::string& parent, std::size_t index);

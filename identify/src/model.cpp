@@ -76,8 +76,9 @@ class ModelReader {
   ModelReader(const std::string& text, const std::string& file)
       : text_(text), file_(file), loc_(detail::locate_json(text)) {}
 
+  TextPosition position(const std::string& path) const { return position_of(text_, loc_.value_offset(path)); }
   [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    const TextPosition p = position_of(text_, loc_.value_offset(path));
+    const TextPosition p = position(path);
     throw InputError(file_, p.line, p.column, message);
   }
   void check_duplicates() const {
@@ -123,16 +124,7 @@ std::string encoder_alias(const std::string& name) {
 }  // namespace
 
 CalibrationModel parse_model(const std::string& text, const std::string& file) {
-  detail::check_json_depth(text, file);
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    const TextPosition at = position_of(text, e.byte == 0 ? 0 : e.byte - 1);
-    throw InputError(file, at.line, at.column, "malformed JSON");
-  } catch (const json::exception& e) {
-    throw InputError(file, 0, 0, std::string("malformed JSON (") + e.what() + ")");
-  }
+  const json j = detail::parse_json_text(text, file);
   const ModelReader r(text, file);
   r.check_duplicates();
   try {
@@ -161,6 +153,7 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
     for (const auto& [k, v] : s->items())
       m.settings[k] = r.finite_number(v, "/estimator/settings/" + k, "estimator setting " + k);
   }
+  m.source_file = file;
   if (const auto d = j.find("data"); d != j.end() && d->is_string()) m.data_file = d->get<std::string>();
   const json& params = r.require(j, "", "parameters");
   if (!params.is_array()) r.fail("/parameters", "\"parameters\" must be an array");
@@ -181,8 +174,11 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
                        std::to_string(it->second + 1) + "); give it once");
     seen[mp.name] = k;
     mp.value = r.finite_number(r.require(p, at, "value"), at + "/value", "value of " + mp.name);
-    if (const auto se = p.find("standard_error"); se != p.end())
+    m.value_positions[mp.name] = r.position(at + "/value");
+    if (const auto se = p.find("standard_error"); se != p.end()) {
       mp.standard_error = r.finite_number(*se, at + "/standard_error", "standard_error of " + mp.name);
+      if (mp.standard_error < 0) r.fail(at + "/standard_error", "standard_error of " + mp.name + " is negative");
+    }
     if (const auto id = p.find("identifiable"); id != p.end() && id->is_boolean()) mp.identifiable = id->get<bool>();
     m.parameters.push_back(mp);
   }
@@ -198,6 +194,7 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
         } catch (const InputError& e) {
           r.fail(at + "/" + pname, e.message());
         }
+        m.value_positions[name + ":" + pname] = r.position(at + "/" + pname);
       }
     }
   }

@@ -129,6 +129,8 @@ void print_pose_error_report(const PoseErrorReport& report, std::ostream& out, b
   row("all", report.all);
   for (const auto& [name, s] : report.groups) row(name, s);
   if (report.skipped > 0) out << report.skipped << " row(s) without a measurement were skipped\n";
+  if (!report.unevaluated.empty())
+    out << report.unevaluated.size() << " measured row(s) could not be evaluated (each named in a warning)\n";
 }
 
 }  // namespace kincal::identify

@@ -350,33 +350,7 @@ Robot parse_hybrid(const json& doc, const Reader& r) {
 }  // namespace
 
 Robot parse_robot(const std::string& text, const std::string& file) {
-  detail::check_json_depth(text, file);
-  json doc;
-  try {
-    doc = json::parse(text);
-  } catch (const json::parse_error& e) {
-    // e.byte is 1-based: the byte at which the parser stopped.
-    const TextPosition p = position_of(text, e.byte > 0 ? e.byte - 1 : 0);
-    std::string what = e.what();
-    // "[json.exception.parse_error.101] parse error at line 1, column 2: syntax error while ..." → the tail.
-    const std::size_t colon = what.find(": ");
-    if (colon != std::string::npos) what = what.substr(colon + 2);
-    throw InputError(file, p.line, p.column, "malformed JSON: " + what);
-  } catch (const json::exception& e) {
-    // e.g. out_of_range.406 "number overflow parsing '1e999'": no byte
-    // position is given, so point at the first occurrence of the token.
-    std::string what = e.what();
-    const std::size_t bracket = what.find("] ");
-    if (bracket != std::string::npos) what = what.substr(bracket + 2);
-    std::size_t at = 0;
-    const std::size_t q1 = what.find('\''), q2 = what.rfind('\'');
-    if (q1 != std::string::npos && q2 > q1) {
-      const std::size_t found = text.find(what.substr(q1 + 1, q2 - q1 - 1));
-      if (found != std::string::npos) at = found;
-    }
-    const TextPosition p = position_of(text, at);
-    throw InputError(file, p.line, p.column, "invalid JSON value: " + what + " (numbers must be finite doubles)");
-  }
+  const json doc = detail::parse_json_text(text, file);
   const Reader r(text, file);
   r.check_duplicates();
   if (!doc.is_object()) r.fail("", "a robot description must be a JSON object, not " + std::string(type_name(doc)));

@@ -278,23 +278,30 @@ PoseErrorReport stewart_residuals(const Robot& nominal_robot, const Robot& calib
   // Residuals of measured rows: no joint limits (joint_limits.hpp).
   const Robot nominal = without_limits(nominal_robot), robot = without_limits(calibrated);
   PoseTable predicted = data;  // "commanded" := the model's prediction, so pose_errors gives measured − predicted
+  std::vector<UnevaluatedRow> unevaluated;
   for (PoseRow& r : predicted.rows) {
     if (!r.measured) continue;
     Vec6<double> q;
     if (r.q) {
       q = r.q->head<6>();
-    } else if (nominal.inverse(Pose<double>::from_xyz_rpy(r.commanded), q) != Status::Ok) {
-      r.measured.reset();  // counted as skipped
+    } else if (const Status s = nominal.inverse(Pose<double>::from_xyz_rpy(r.commanded), q); s != Status::Ok) {
+      unevaluated.push_back({r.id, r.line, "nominal IK of the commanded pose failed (" + std::string(to_string(s)) + ")"});
+      r.measured.reset();
       continue;
     }
     Pose<double> pose;
-    if (stewart_fk(robot.stewart(), q, Pose<double>::from_xyz_rpy(*r.measured), pose).status != Status::Ok) {
+    if (const Status s = stewart_fk(robot.stewart(), q, Pose<double>::from_xyz_rpy(*r.measured), pose).status;
+        s != Status::Ok) {
+      unevaluated.push_back({r.id, r.line, "FK of the model failed (" + std::string(to_string(s)) + ")"});
       r.measured.reset();
       continue;
     }
     r.commanded = pose.to_xyz_rpy();
   }
-  return pose_errors(predicted);
+  PoseErrorReport report = pose_errors(predicted);
+  report.skipped -= unevaluated.size();
+  report.unevaluated = std::move(unevaluated);
+  return report;
 }
 
 CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& c, const std::string& data_file) {

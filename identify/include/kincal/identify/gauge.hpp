@@ -10,6 +10,7 @@
 
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/pose.hpp"
+#include "kincal/identify/csv.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 
 namespace kincal::identify {
@@ -49,6 +50,15 @@ void identification_jacobian(const HybridErrorModel& model, MeasurementKind kind
                              const std::vector<Pose<double>>& nodes, Eigen::MatrixXd& H);
 Eigen::MatrixXd identification_jacobian(const HybridErrorModel& model, MeasurementKind kind, double radius,
                                         const std::vector<Pose<double>>& nodes);
+
+// A measurement blunder no fit can survive, refused before any fit: a row
+// whose three measured targets are not the gauge's triangle — a side off the
+// gauge's own (√3 · radius) by more than 10 % (35 mm on seed 000's 200 mm
+// gauge; a mis-seated target is millimetres off and is left to the outlier
+// screen). InputError at the row's line, naming the side. Without this, a
+// target read as 1e30 mm pulled seed 000's coarse stage until some other
+// node's FK failed, and the error named that node (issue #10 item 11).
+void require_gauge_triangles(const PoseTable& data, double radius);
 
 // Calibration nodes of seed 000 Section 3: for each z in `layers`, L × L nodes
 // evenly spaced over [−half_width, half_width]² in x and y of {R}, orientation

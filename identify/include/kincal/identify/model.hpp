@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/input_error.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify {
@@ -30,6 +31,13 @@ struct CalibrationModel {
   // Identified physical effects (identify/effects.hpp), "effects" in the
   // JSON; `effects.to_core(nominal)` is what the controller corrects.
   EffectValues effects;
+  // Where each value stood in the MODEL.json it was read from (parse_model;
+  // empty for a model made in memory), keyed by parameter name ("dXB1") or
+  // "effect:parameter" ("scale:s2"): a fault found later, such as a table
+  // that fails its machine-limit check (calibration_table.hpp), names the
+  // file, line and column of the value that causes it.
+  std::string source_file;
+  std::map<std::string, TextPosition> value_positions;
 };
 
 // nominal + identified errors (the machine as the model believes it is).

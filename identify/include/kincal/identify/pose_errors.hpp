@@ -28,9 +28,20 @@ struct PoseErrorStats {
   double max_orientation_rad = 0, mean_orientation_rad = 0;
 };
 
+// A measured row the model could not be evaluated at, and why ("nominal IK of
+// the commanded pose failed (unreachable)"): the tool warns about each one at
+// its line, where it used to count it silently with the rows that have no
+// measurement.
+struct UnevaluatedRow {
+  std::string id;
+  std::size_t line = 0;
+  std::string why;
+};
+
 struct PoseErrorReport {
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;  // rows without a measurement (failed simulation)
+  std::vector<UnevaluatedRow> unevaluated;
   PoseErrorStats all;
   std::map<std::string, PoseErrorStats> groups;  // "cal", "test", "layer N", "layer N test", ...
 };
