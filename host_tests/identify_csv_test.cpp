@@ -113,8 +113,9 @@ TEST(identifyCsv, DuplicateIdsAreRejected) {
 }
 
 TEST(identifyCsv, StructuralErrors) {
-  EXPECT_EQ(std::string(table_error("").what()), "m.csv: empty file (expected a header row)");
-  EXPECT_EQ(std::string(table_error("# only a comment\n\n").what()), "m.csv: empty file (expected a header row)");
+  EXPECT_EQ(std::string(table_error("").what()), "m.csv:1:1: empty file (expected a header row)");
+  EXPECT_EQ(std::string(table_error("# only a comment\n\n").what()),
+            "m.csv:3:1: no header row (the file has only comments and blank lines)");
   EXPECT_EQ(std::string(table_error("id,x,y,z,rx,ry,rz\n").what()), "m.csv:1: no data rows after the header");
   {
     const ki::InputError e = table_error("id,x,y,z,rx,ry,rz\na,0,0,0,0,0\n");

@@ -135,7 +135,11 @@ CsvDocument parse_csv(std::string_view text, const std::string& file) {
                            std::to_string(doc.header.fields.size()));
     doc.rows.push_back(std::move(rec));
   }
-  if (!have_header) throw InputError(file, 0, 0, "empty file (expected a header row)");
+  // Where the header should have been: just past what the file has.
+  if (!have_header)
+    throw InputError(file, line_no + 1, 1,
+                     line_no == 0 ? "empty file (expected a header row)"
+                                  : "no header row (the file has only comments and blank lines)");
   return doc;
 }
 
