@@ -273,3 +273,23 @@ TEST(identifyInputChecks, AnglesAreRadiansOfOneTurnAtMost) {
   // A turn is allowed, and negative angles.
   EXPECT_EQ(error_of([&] { ki::parse_pose_table(head + "a,0,0,200,-3.1,6.28,0,0,0,200,0,0,-6.2\n", "p.csv"); }), "");
 }
+
+// The audit accepted a stroke of 0…1e9 mm and a home pose turned by −1e6 rad.
+TEST(identifyInputChecks, RobotNumbersAreOfAMachineSize) {
+  const std::string good = ki::robot_to_json(ki::builtin_robot("stewart-seed001"));
+  std::string big = good;
+  const std::size_t max = big.find("283.23807999999997");
+  ASSERT_NE(max, std::string::npos);
+  big.replace(max, 18, "1e9");
+  std::string e = error_of([&] { ki::parse_robot(big, "r.json"); });
+  EXPECT_TRUE(contains(e, "is beyond 1e6 (a kilometre in mm)")) << e;
+  const std::size_t line = std::size_t(std::count(big.begin(), big.begin() + long(max), '\n')) + 1;
+  EXPECT_TRUE(contains(e, "r.json:" + std::to_string(line) + ":")) << e;
+  std::string turned = good;
+  const std::size_t rx = turned.find("\"rx\": 0.0");
+  ASSERT_NE(rx, std::string::npos);
+  turned.replace(rx, 9, "\"rx\": -1000000.0");
+  e = error_of([&] { ki::parse_robot(turned, "r.json"); });
+  EXPECT_TRUE(contains(e, "more than a turn")) << e;
+  EXPECT_EQ(error_of([&] { ki::parse_robot(good, "r.json"); }), "");
+}

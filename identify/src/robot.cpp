@@ -189,10 +189,20 @@ class Reader {
     return j;
   }
 
+  // Every number of a description is a length in mm, an angle in rad or a
+  // ratio: none of a parallel machine reaches a kilometre. Larger is a typo
+  // or a unit mistake (the audit's 1e9 mm stroke passed before).
   double number(const json& j, const std::string& path) const {
     if (!j.is_number()) fail(path, display(path) + " must be a number, not " + type_name(j));
     const double v = j.get<double>();
     if (!std::isfinite(v)) fail(path, display(path) + " must be finite");
+    if (!(std::abs(v) <= 1e6)) fail(path, display(path) + " is beyond 1e6 (a kilometre in mm): a typo or a unit mistake");
+    return v;
+  }
+  // A pose angle: radians of one turn at most (as in the CSV files).
+  double angle(const json& j, const std::string& path) const {
+    const double v = number(j, path);
+    if (!(std::abs(v) <= 2 * pi<double>())) fail(path, display(path) + " is more than a turn (2 pi rad): angles are in radians");
     return v;
   }
   double non_negative(const json& j, const std::string& path) const {
@@ -285,8 +295,8 @@ Robot parse_stewart(const json& doc, const Reader& r) {
   g.length_offset = doc.contains("length_offset") ? r.vector<6>(doc["length_offset"], "/length_offset") : Vec6<double>::Zero();
   const json& home = r.object(doc["home"], "/home", {"x", "y", "z", "rx", "ry", "rz"}, {});
   g.home = Pose<double>::from_xyz_rpy(r.number(home["x"], "/home/x"), r.number(home["y"], "/home/y"),
-                                      r.number(home["z"], "/home/z"), r.number(home["rx"], "/home/rx"),
-                                      r.number(home["ry"], "/home/ry"), r.number(home["rz"], "/home/rz"));
+                                      r.number(home["z"], "/home/z"), r.angle(home["rx"], "/home/rx"),
+                                      r.angle(home["ry"], "/home/ry"), r.angle(home["rz"], "/home/rz"));
   if (doc.contains("screw_lead")) robot.screw_lead = r.positive(doc["screw_lead"], "/screw_lead");
   if (doc.contains("max_correction")) robot.max_correction = r.per_joint_positive(doc["max_correction"], "/max_correction");
   if (doc.contains("targets")) robot.targets = r.target_points(doc["targets"], "/targets");
