@@ -22,6 +22,21 @@ using Eigen::VectorXd;
 
 bool usable(const PoseRow& r) { return r.status.empty() || r.status == "ok"; }
 
+}  // namespace
+
+VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) {
+  // Column-scaled, rank-revealing: a column of zeros or one in the span of
+  // the others gets the minimum-norm share (0).
+  VectorXd scale(X.cols());
+  for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(1e-10);
+  cod.compute(X * scale.cwiseInverse().asDiagonal());
+  return scale.cwiseInverse().asDiagonal() * cod.solve(y);
+}
+
+namespace {
+
 // The joints the model drives: the row's q1..q6 (the commands sent, or the
 // effect-corrected joints of effect_corrected_table), else the nominal IK.
 Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
@@ -57,132 +72,179 @@ BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vec
   return base;
 }
 
-BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
-                      const std::string& estimator, bool finish, double ridge_k) {
-  const bool ridge = estimator == "ridge";
-  const HybridFineEstimator fine = ridge                       ? HybridFineEstimator::Ridge
-                                   : estimator == "ols" || finish ? HybridFineEstimator::Ols
-                                                                  : HybridFineEstimator::Liu;
+}  // namespace
+
+HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
+                             const std::vector<std::optional<EffectNode>>& en, const std::string& estimator,
+                             bool finish, double ridge_k)
+    : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())), ridge_(estimator == "ridge"), finish_(finish) {
+  fine_ = ridge_                             ? HybridFineEstimator::Ridge
+          : estimator == "ols" || finish     ? HybridFineEstimator::Ols
+                                             : HybridFineEstimator::Liu;
   HybridCalibrationOptions opt;
-  // Seed 000's single fine step and its estimates as they are: the fit below
+  // Seed 000's single fine step and its estimates as they are: the fit
   // finishes it by its own Gauss–Newton steps (OLS or ridge), which the
   // fine stage's re-linearisation along Liu's path would only move away from.
   opt.max_linearisations = 1;
   opt.liu_fallback = HybridFineEstimator::None;
   opt.test_nodes = false;  // the base fit's own screen runs on its final model (outliers.hpp), not here
-  const HybridCalibration cal = calibrate_hybrid(robot, data, opt);
+  cal_ = calibrate_hybrid(robot, data, opt);
   // Start from seed 000's coarse + fine estimate and finish the fit by
   // Gauss–Newton steps on the same identifiable columns: the fine stage is
   // one linear step from the coarse machine, which leaves the residual short
   // of its minimum (e.g. 6.3 vs 4.9 µm RMS on the diagnosis design) and not
-  // orthogonal to the columns — the F tests and the effect fits below need
-  // both. "ridge": the minimum of RSS + k·‖χ − χ_coarse‖² (k by seed 000's
+  // orthogonal to the columns — the F tests and the effect fits need both.
+  // "ridge": the minimum of RSS + k·‖χ − χ_coarse‖² (k by seed 000's
   // fine-stage GCV unless given), the penalised objective reached by
   // Gauss–Newton on the augmented rows √k·I.
-  HybridCompensation comp = cal.compensation(fine);
-  if (comp.structural.size() == 0) comp.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
-  const HybridGeometry<double> g0 = without_limits(robot.hybrid());  // measured rows: no limits
-  const Index p = Index(cal.kept.size());
-  const double penalty = !ridge ? 0.0 : ridge_k > 0 ? ridge_k : cal.ridge.ridge_k;
-  VectorXd reference(p);  // the coarse machine: the fine stage's starting point
-  for (Index j = 0; j < p; ++j) {
-    const Index idx = cal.kept[std::size_t(j)];
-    reference(j) = idx < HybridErrorModel::kEncoderCount ? cal.coarse_xi(idx) : 0.0;
+  comp_ = cal_.compensation(fine_);
+  if (comp_.structural.size() == 0) comp_.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
+  p_ = Index(cal_.kept.size());
+  penalty_ = !ridge_ ? 0.0 : ridge_k > 0 ? ridge_k : cal_.ridge.ridge_k;
+  reference_.resize(p_);  // the coarse machine: the fine stage's starting point
+  for (Index j = 0; j < p_; ++j) {
+    const Index idx = cal_.kept[std::size_t(j)];
+    reference_(j) = idx < HybridErrorModel::kEncoderCount ? cal_.coarse_xi(idx) : 0.0;
   }
-  auto values_of = [&](const HybridCompensation& c) {
-    VectorXd v(p);
-    for (Index j = 0; j < p; ++j) {
-      const Index idx = cal.kept[std::size_t(j)];
-      v(j) = idx < HybridErrorModel::kEncoderCount ? c.encoder_offsets(idx) : c.structural(idx);
-    }
-    return v;
-  };
-  MatrixXd B(6, HybridErrorModel::kParameterCount);
   // The structural twist $_t = B(p)·Δη alone, at any pose, by core's
   // evaluation (the compensator's: hybrid_error_twist.hpp, the same model
   // as B to rounding) — a few thousand operations where a full 6 × 150 B
-  // costs a hundred times more; the joint map below needs twelve of them per
-  // node. Δη has zeros at the encoder entries, so the twist is structural only.
-  const HybridErrorReference<double> twist_reference =
-      hybrid_error_reference(comp.nominal, HybridErrorModelOptions().up_split);
+  // costs a hundred times more; the joint map needs twelve of them per node.
+  twist_reference_ = hybrid_error_reference(comp_.nominal, HybridErrorModelOptions().up_split);
+}
+
+VectorXd HybridBaseFit::values() const {
+  VectorXd v(p_);
+  for (Index j = 0; j < p_; ++j) {
+    const Index idx = cal_.kept[std::size_t(j)];
+    v(j) = idx < HybridErrorModel::kEncoderCount ? comp_.encoder_offsets(idx) : comp_.structural(idx);
+  }
+  return v;
+}
+
+void HybridBaseFit::step(const VectorXd& delta) {
+  for (Index j = 0; j < p_; ++j) {
+    const Index idx = cal_.kept[std::size_t(j)];
+    if (idx < HybridErrorModel::kEncoderCount)
+      comp_.encoder_offsets(idx) += delta(j);
+    else
+      comp_.structural(idx) += delta(j);
+  }
+}
+
+BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) const {
+  // Δη has zeros at the encoder entries, so the twist is structural only.
   auto structural_twist = [&](const Pose<double>& pose, Twist<double>& t) {
     HybridFrames<double> f;
     HybridWrenches<double> w;
     Vec3<double> angles;
-    return hybrid_frames_at_pose(comp.nominal, pose, f, angles) == Status::Ok &&
-           hybrid_wrenches(comp.nominal, f, w) == Status::Ok &&
-           hybrid_error_twist(comp.nominal, twist_reference, f, w, comp.structural.data(), t) == Status::Ok;
-  };
-  // with_joint_map: also ∂$_t/∂p per node by central differences of B(p)·Δη
-  // (NodeData::joint_map), for the effect columns at the solution.
-  auto evaluate = [&](BaseModel& base, bool with_joint_map = false) {
-    base.nodes.clear();
-    const HybridGeometry<double> gc = without_limits(comp.controller_geometry());
-    for (std::size_t k = 0; k < data.rows.size(); ++k) {
-      const PoseRow& row = data.rows[k];
-      if (!row.targets || !usable(row) || !en[k]) continue;
-      const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-      HybridPassive<double> guess = g0.home;
-      Vec6<double> q_ik;
-      if (hybrid_ik(g0, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
-      Pose<double> predicted;
-      if (hybrid_fk(gc, joints_of(row, *en[k]), guess, predicted).status != Status::Ok) continue;
-      // The structural twist at the pose the ideal machine reaches, joint
-      // effects included (as the fine stage puts it and core's fixed point
-      // p = apply_twist(target, −$_t(p)) inverts). Not at the commanded pose:
-      // where the estimate's ill-conditioned combinations are large, the
-      // twist changes fast with the point it is evaluated at, and a model and
-      // a compensation that evaluate it at different points disagree by
-      // micrometres (clean hybrid data: 15.6 µm compensated; 2.24 µm here).
-      if (comp.model->error_jacobian(predicted, B) != Status::Ok) continue;
-      Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
-      if (with_joint_map) {
-        bool ok = true;
-        for (int i = 0; i < 6 && ok; ++i) {
-          const double h = i < 3 ? 1e-3 : 1e-6;  // mm, rad: B·Δη is smooth on this scale
-          Twist<double> d = Twist<double>::Zero();
-          d(i) = h;
-          Twist<double> plus, minus;
-          ok = structural_twist(apply_twist(predicted, d), plus) &&
-               structural_twist(apply_twist(predicted, Twist<double>(-d)), minus);
-          if (ok) joint_map.col(i) += (plus - minus) / (2 * h);
-        }
-        if (!ok) joint_map.setIdentity();
-      }
-      predicted = apply_twist(predicted, Twist<double>(B * comp.structural));
-      const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0, robot.gauge_radius, predicted);
-      NodeData n;
-      n.row = k;
-      n.test = row.role == Role::Test;
-      n.r.resize(9);
-      for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
-      n.M = gauge_map(g0, robot.gauge_radius, predicted);
-      n.H.resize(9, p);
-      for (Index j = 0; j < p; ++j) n.H.col(j) = n.M * B.col(cal.kept[std::size_t(j)]);
-      n.effect = *en[k];
-      n.joint_map = joint_map;
-      base.nodes.push_back(std::move(n));
-    }
+    return hybrid_frames_at_pose(comp_.nominal, pose, f, angles) == Status::Ok &&
+           hybrid_wrenches(comp_.nominal, f, w) == Status::Ok &&
+           hybrid_error_twist(comp_.nominal, twist_reference_, f, w, comp_.structural.data(), t) == Status::Ok;
   };
   BaseModel base;
-  base.parameters = p;
+  base.parameters = p_;
+  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
+  const std::vector<std::optional<EffectNode>>& en = *en_;
+  for (std::size_t k = 0; k < data.rows.size(); ++k) {
+    const PoseRow& row = data.rows[k];
+    if (!row.targets || !usable(row) || !en[k]) continue;
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    HybridPassive<double> guess = g0_.home;
+    Vec6<double> q_ik;
+    if (hybrid_ik(g0_, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
+    Pose<double> predicted;
+    if (hybrid_fk(gc, joints_of(row, *en[k]), guess, predicted).status != Status::Ok) continue;
+    // The structural twist at the pose the ideal machine reaches, joint
+    // effects included (as the fine stage puts it and core's fixed point
+    // p = apply_twist(target, −$_t(p)) inverts). Not at the commanded pose:
+    // where the estimate's ill-conditioned combinations are large, the
+    // twist changes fast with the point it is evaluated at, and a model and
+    // a compensation that evaluate it at different points disagree by
+    // micrometres (clean hybrid data: 15.6 µm compensated; 2.24 µm here).
+    if (comp_.model->error_jacobian(predicted, B) != Status::Ok) continue;
+    // with_joint_map: also ∂$_t/∂p per node by central differences of
+    // B(p)·Δη (NodeData::joint_map), for the effect columns.
+    Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
+    if (with_joint_map) {
+      bool ok = true;
+      for (int i = 0; i < 6 && ok; ++i) {
+        const double h = i < 3 ? 1e-3 : 1e-6;  // mm, rad: B·Δη is smooth on this scale
+        Twist<double> d = Twist<double>::Zero();
+        d(i) = h;
+        Twist<double> plus, minus;
+        ok = structural_twist(apply_twist(predicted, d), plus) &&
+             structural_twist(apply_twist(predicted, Twist<double>(-d)), minus);
+        if (ok) joint_map.col(i) += (plus - minus) / (2 * h);
+      }
+      if (!ok) joint_map.setIdentity();
+    }
+    predicted = apply_twist(predicted, Twist<double>(B * comp_.structural));
+    const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0_, robot_->gauge_radius, predicted);
+    NodeData n;
+    n.row = k;
+    n.test = row.role == Role::Test;
+    n.r.resize(9);
+    for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
+    n.M = gauge_map(g0_, robot_->gauge_radius, predicted);
+    n.H.resize(9, p_);
+    for (Index j = 0; j < p_; ++j) n.H.col(j) = n.M * B.col(cal_.kept[std::size_t(j)]);
+    n.effect = *en[k];
+    n.joint_map = joint_map;
+    base.nodes.push_back(std::move(n));
+  }
+  return base;
+}
+
+double HybridBaseFit::objective(const BaseModel& base) const {
+  double o = penalty_ * (values() - reference_).squaredNorm();
+  for (const NodeData& n : base.nodes) o += n.test ? 0.0 : n.r.squaredNorm();
+  return o;
+}
+
+void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int steps) const {
+  base.description = "seed 000 coarse + fine model, " + std::to_string(p_) + " identifiable of " +
+                     std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
+                     (ridge_    ? "ridge (k = " + std::to_string(penalty_) + ") finished by " + std::to_string(steps) +
+                                   " Gauss-Newton steps"
+                      : finish_ ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
+                                : std::string(fine_ == HybridFineEstimator::Liu ? "Liu" : "OLS"));
+  base.model = hybrid_model(*robot_, cal_, fine_, data_file);
+  for (ModelParameter& mp : base.model.parameters) {
+    const int idx = comp_.model->index_of(mp.name);
+    if (idx < 0 || !mp.identifiable) continue;
+    mp.value = idx < HybridErrorModel::kEncoderCount ? comp_.encoder_offsets(idx) : comp_.structural(idx);
+  }
+  base.model.settings["gauss_newton_steps"] = double(steps);
+  if (ridge_) base.model.settings["ridge_k"] = penalty_;
+  base.ridge_k = penalty_;
+  base.column_away = values() - reference_;
+}
+
+namespace {
+
+BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
+                      const std::string& estimator, bool finish, double ridge_k) {
+  HybridBaseFit fit(robot, data, en, estimator, finish, ridge_k);
+  const Index p = fit.parameters();
+  const double penalty = fit.penalty();
+  BaseModel base;
   int steps = 0;
   double previous_objective = std::numeric_limits<double>::infinity();
-  HybridCompensation previous = comp;
-  const int max_steps = finish || ridge ? 6 : 0;
+  HybridCompensation previous = fit.state();
+  const int max_steps = finish || estimator == "ridge" ? 6 : 0;
   std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
   for (; steps < max_steps; ++steps) {
-    evaluate(base);
-    const VectorXd away = values_of(comp) - reference;
-    double objective = penalty * away.squaredNorm();
-    for (const NodeData& n : base.nodes) objective += n.test ? 0.0 : n.r.squaredNorm();
+    base = fit.evaluate(data, false);
+    const double objective = fit.objective(base);
     if (steps == 0) modelled = base.nodes.size();
     if (objective > previous_objective || base.nodes.size() < modelled) {  // a step that does not lower the objective is undone
-      comp = previous;  // evaluated after the loop
+      fit.restore(previous);  // evaluated after the loop
       break;
     }
     previous_objective = objective;
-    previous = comp;
+    previous = fit.state();
     Index rows = 0;
     for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
     const Index penalty_rows = penalty > 0 ? p : 0;
@@ -197,40 +259,14 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
     }
     if (penalty > 0) {
       H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-      y.tail(p) = -std::sqrt(penalty) * away;
+      y.tail(p) = -std::sqrt(penalty) * fit.away();
     }
-    VectorXd scale(p);
-    for (Index j = 0; j < p; ++j) scale(j) = H.col(j).norm() > 0 ? H.col(j).norm() : 1.0;
-    Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
-    cod.setThreshold(1e-10);
-    cod.compute(H * scale.cwiseInverse().asDiagonal());
-    const VectorXd delta = scale.cwiseInverse().asDiagonal() * cod.solve(y);
+    const VectorXd delta = scaled_least_squares(H, y);
     if ((H * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
-    for (Index j = 0; j < p; ++j) {
-      const Index idx = cal.kept[std::size_t(j)];
-      if (idx < HybridErrorModel::kEncoderCount)
-        comp.encoder_offsets(idx) += delta(j);
-      else
-        comp.structural(idx) += delta(j);
-    }
+    fit.step(delta);
   }
-  evaluate(base, true);  // at the solution, with the joint maps the effect columns need
-  base.description = "seed 000 coarse + fine model, " + std::to_string(p) + " identifiable of " +
-                     std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
-                     (ridge    ? "ridge (k = " + std::to_string(penalty) + ") finished by " + std::to_string(steps) +
-                                  " Gauss-Newton steps"
-                      : finish ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
-                               : std::string(fine == HybridFineEstimator::Liu ? "Liu" : "OLS"));
-  base.model = hybrid_model(robot, cal, fine, data.file);
-  for (ModelParameter& mp : base.model.parameters) {
-    const int idx = comp.model->index_of(mp.name);
-    if (idx < 0 || !mp.identifiable) continue;
-    mp.value = idx < HybridErrorModel::kEncoderCount ? comp.encoder_offsets(idx) : comp.structural(idx);
-  }
-  base.model.settings["gauss_newton_steps"] = double(steps);
-  if (ridge) base.model.settings["ridge_k"] = penalty;
-  base.ridge_k = penalty;
-  base.column_away = values_of(comp) - reference;
+  base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
+  fit.finish(base, data.file, steps);
   return base;
 }
 

@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
@@ -46,6 +48,49 @@ struct BaseModel {
   // RSS, and χ − χ_coarse over the design's columns (k = 0 otherwise).
   double ridge_k = 0;
   Eigen::VectorXd column_away;
+};
+
+// The column-scaled least-squares step (rank-revealing COD; a zero or
+// collinear column gets no share): the one solve of every Gauss–Newton step
+// of the base and effect fits.
+Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);
+
+// The hybrid's base fit as a state: seed 000's coarse + fine estimate on the
+// start table (calibrate_hybrid, once), then evaluated on any table (the
+// measurements corrected for effects at the current effect values) and
+// stepped on seed 000's identifiable columns. fit_base finishes it by
+// Gauss–Newton alone; the joint fit of base and effects
+// (effect_calibration.cpp) steps it together with the effect parameters.
+class HybridBaseFit {
+ public:
+  HybridBaseFit(const Robot& robot, const PoseTable& start, const std::vector<std::optional<EffectNode>>& nodes,
+                const std::string& estimator, bool finish_least_squares, double ridge_k);
+  Eigen::Index parameters() const { return p_; }
+  double penalty() const { return penalty_; }  // k of "ridge", else 0
+  Eigen::VectorXd values() const;              // χ on the identifiable columns
+  Eigen::VectorXd away() const { return values() - reference_; }  // χ − χ_coarse
+  void step(const Eigen::VectorXd& delta);     // χ += delta
+  HybridCompensation state() const { return comp_; }
+  void restore(const HybridCompensation& s) { comp_ = s; }
+  // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
+  BaseModel evaluate(const PoseTable& data, bool with_joint_map) const;
+  // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².
+  double objective(const BaseModel& base) const;
+  // Description, model (the current χ), ridge_k and column_away of `base`.
+  void finish(BaseModel& base, const std::string& data_file, int steps) const;
+
+ private:
+  const Robot* robot_;
+  const std::vector<std::optional<EffectNode>>* en_;
+  HybridGeometry<double> g0_;
+  bool ridge_, finish_;
+  HybridFineEstimator fine_ = HybridFineEstimator::Ols;
+  HybridCalibration cal_;
+  HybridCompensation comp_;
+  Eigen::Index p_ = 0;
+  double penalty_ = 0;
+  Eigen::VectorXd reference_;
+  HybridErrorReference<double> twist_reference_{};
 };
 
 // `fit_data`: the table the base model is fitted on and compared with (the

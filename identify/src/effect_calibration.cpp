@@ -161,14 +161,10 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
       y.conservativeResize(n + p);
       y.tail(p) = -std::sqrt(ridge_k) * base.column_away;
     }
-    VectorXd scale(X.cols());
-    for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
-    Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
-    cod.setThreshold(1e-10);
-    cod.compute(X * scale.cwiseInverse().asDiagonal());
-    const VectorXd delta = scale.cwiseInverse().asDiagonal() * cod.solve(y);
+    const VectorXd delta = detail::scaled_least_squares(X, y);
     // Convergence on the effect's contribution to the residual (scaled update).
-    const VectorXd scaled_effect_step = (scale.asDiagonal() * delta).tail(X.cols() - H.cols());
+    VectorXd scaled_effect_step = delta.tail(X.cols() - H.cols());
+    for (Index j = 0; j < scaled_effect_step.size(); ++j) scaled_effect_step(j) *= X.col(H.cols() + j).norm();
     Index c = H.cols();
     for (const Effect* e : list) {
       VectorXd& v = values.values[e->name()];
