@@ -43,6 +43,20 @@ std::string model_text(const std::string& robot, const std::string& parameters, 
   return text.substr(0, at) + "\"parameters\": [" + parameters + "]" + extra + text.substr(at + 16);
 }
 
+// `n` rows of a hybrid poses table, pure translations `at(k)` (x, y, z).
+template <class At> ki::PoseTable translations(const std::string& file, int n, At at) {
+  ki::PoseTable poses;
+  poses.file = file;
+  for (int k = 0; k < n; ++k) {
+    ki::PoseRow r;
+    r.id = file.substr(0, 1) + std::to_string(k);
+    r.line = std::size_t(k) + 2;
+    r.commanded << at(k), 0, 0, 0;
+    poses.rows.push_back(r);
+  }
+  return poses;
+}
+
 std::string parameter(const std::string& name, double value) {
   return "{\"name\": \"" + name + "\", \"value\": " + std::to_string(value) + "}";
 }
@@ -159,14 +173,8 @@ TEST(identifyInputChecks, DegenerateRobotsAreRefused) {
 // exit 0, "p < 0"); the 6-UPS said 7 nodes were enough but failed at 7.
 TEST(identifyInputChecks, TooFewNodesSayHowManyAreNeeded) {
   const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
-  ki::PoseTable poses;
-  poses.file = "few.csv";
-  for (int k = 0; k < 6; ++k) {
-    ki::PoseRow r;
-    r.id = "n" + std::to_string(k);
-    r.commanded << -200 + 80 * k, 150 - 60 * k, -40 + 16 * k, 0, 0, 0;
-    poses.rows.push_back(r);
-  }
+  const ki::PoseTable poses =
+      translations("few.csv", 6, [](int k) { return kincal::Vec3<double>(-200 + 80 * k, 150 - 60 * k, -40 + 16 * k); });
   ki::SimulateReport rep;
   const ki::PoseTable h = ki::simulate(hybrid, hybrid, poses, ki::SimulateOptions{}, rep, nullptr);
   std::string e = error_of([&] { ki::calibrate_hybrid(hybrid, h); });
@@ -242,15 +250,8 @@ TEST(identifyInputChecks, JsonNumbersOutOfRangeAndNegativeStandardErrorsArePlace
 // of another node failed, and the message named that node without a line.
 TEST(identifyInputChecks, AGaugeBlunderIsRefusedAtItsRow) {
   const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
-  ki::PoseTable poses;
-  poses.file = "g.csv";
-  for (int k = 0; k < 20; ++k) {
-    ki::PoseRow r;
-    r.id = "g" + std::to_string(k);
-    r.line = std::size_t(k) + 2;
-    r.commanded << -200 + 21 * k, 150 - 17 * (k % 7), -40 + 4 * k, 0, 0, 0;
-    poses.rows.push_back(r);
-  }
+  const ki::PoseTable poses = translations(
+      "g.csv", 20, [](int k) { return kincal::Vec3<double>(-200 + 21 * k, 150 - 17 * (k % 7), -40 + 4 * k); });
   ki::SimulateReport rep;
   ki::PoseTable h = ki::simulate(hybrid, hybrid, poses, ki::SimulateOptions{}, rep, nullptr);
   ASSERT_EQ(rep.simulated, 20u);

@@ -210,22 +210,26 @@ bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& opti
 
 }  // namespace
 
-StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
-                                                          const CalibrationTableOptions& options) {
+namespace {
+// A table from `build`, or the fault located (throw_table_fault).
+template <class Build>
+auto checked_table(const CalibrationModel& model, const CalibrationTableOptions& options, Build build) {
   CompensationStatus st = CompensationStatus::Ok;
   std::string why;
-  const StewartCalibrationTable<double> t = stewart_table(model, options, st, &why);
+  auto t = build(model, options, st, &why);
   if (st != CompensationStatus::Ok) throw_table_fault(model, options, why);
   return t;
+}
+}  // namespace
+
+StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
+                                                          const CalibrationTableOptions& options) {
+  return checked_table(model, options, stewart_table);
 }
 
 HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& model,
                                                         const CalibrationTableOptions& options) {
-  CompensationStatus st = CompensationStatus::Ok;
-  std::string why;
-  const HybridCalibrationTable<double> t = hybrid_table(model, options, st, &why);
-  if (st != CompensationStatus::Ok) throw_table_fault(model, options, why);
-  return t;
+  return checked_table(model, options, hybrid_table);
 }
 
 AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options) {
