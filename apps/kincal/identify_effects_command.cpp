@@ -65,10 +65,8 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
       std::cout << " (not significant beyond the base and the other parameters: t = " << h.t << ", p = " << h.p_value
                 << " x " << h.free_parameters << " free > alpha " << opt.alpha << ")\n";
   }
+  std::cout << "  base: " << report.base << "\n";
   std::cout << "  final: cal " << report.rms_cal_um_final << " um, test " << report.rms_test_um_final << " um\n";
-  if (robot.is_hybrid() && estimator != "ridge")
-    std::cout << "  (hybrid: --estimator ridge keeps the ill-conditioned source errors near the coarse machine and "
-                 "usually compensates nearer the noise; docs/diagnosis.md compares both per effect)\n";
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
   for (const auto& [name, v] : model.effects.values) {
     const std::vector<std::string> pn = ki::find_effect(name)->parameter_names(robot);
@@ -88,6 +86,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
     j["robot"] = robot.name;
     j["data"] = data_path;
     j["estimator"] = model.estimator;
+    j["base"] = report.base;
     j["effects"] = values;
     j["passes"] = report.passes;
     nlohmann::ordered_json held = nlohmann::ordered_json::array();

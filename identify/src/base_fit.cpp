@@ -204,9 +204,10 @@ double HybridBaseFit::objective(const BaseModel& base) const {
 }
 
 void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int steps) const {
+  const bool ridge = ridge_ || penalty_ > 0;  // a joint fit may set a k (set_penalty)
   base.description = "seed 000 coarse + fine model, " + std::to_string(p_) + " identifiable of " +
                      std::to_string(HybridErrorModel::kParameterCount) + " source errors, " +
-                     (ridge_    ? "ridge (k = " + std::to_string(penalty_) + ") finished by " + std::to_string(steps) +
+                     (ridge     ? "ridge (k = " + std::to_string(penalty_) + ") finished by " + std::to_string(steps) +
                                    " Gauss-Newton steps"
                       : finish_ ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
                                 : std::string(fine_ == HybridFineEstimator::Liu ? "Liu" : "OLS"));
@@ -217,7 +218,10 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
     mp.value = idx < HybridErrorModel::kEncoderCount ? comp_.encoder_offsets(idx) : comp_.structural(idx);
   }
   base.model.settings["gauss_newton_steps"] = double(steps);
-  if (ridge_) base.model.settings["ridge_k"] = penalty_;
+  if (ridge) {
+    base.model.estimator = "ridge";
+    base.model.settings["ridge_k"] = penalty_;
+  }
   base.ridge_k = penalty_;
   base.column_away = values() - reference_;
 }

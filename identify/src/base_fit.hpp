@@ -67,6 +67,7 @@ class HybridBaseFit {
                 const std::string& estimator, bool finish_least_squares, double ridge_k);
   Eigen::Index parameters() const { return p_; }
   double penalty() const { return penalty_; }  // k of "ridge", else 0
+  void set_penalty(double k) { penalty_ = k; }
   Eigen::VectorXd values() const;              // χ on the identifiable columns
   Eigen::VectorXd away() const { return values() - reference_; }  // χ − χ_coarse
   void step(const Eigen::VectorXd& delta);     // χ += delta

@@ -46,6 +46,7 @@ struct HeldParameter {
 };
 
 struct EffectCalibrationReport {
+  std::string base;  // how the base was fitted and, for the hybrid, why that estimator (printed by identify)
   int passes = 0;
   std::vector<double> rms_cal_um;  // cal residual RMS per pass (measurement coordinates)
   double rms_cal_um_final = 0, rms_test_um_final = 0;
