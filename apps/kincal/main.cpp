@@ -659,7 +659,7 @@ int run(int argc, char** argv) {
   identify->add_option("--robot", ident.robot, "built-in robot name or robot description file")->required();
   identify->add_option("--data", ident.data, "measurement CSV")->required();
   identify->add_option("--out", ident.out, "MODEL.json to write")->required();
-  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr; with --effects: ols (default), or ridge on the hybrid")
+  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr; with --effects: the 6-UPS ols; the hybrid ridge with k by GCV on base + effects (default), ols, or ridge with --ridge-k")
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
   identify->add_option("--ridge-k", ident.ridge_k,
                        "ridge's k: gcv (generalized cross-validation, default), hkb (Hoerl-Kennard-Baldwin) or a "
