@@ -388,7 +388,10 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     for (std::size_t k = 0; k < c.linearisations.size(); ++k) {
       const ki::HybridFineLinearisation& l = c.linearisations[k];
       const double rows = 9.0 * double(c.cal_nodes);
-      std::cout << "    linearisation " << k + 1 << ": step " << l.step_fraction << ", residual rms "
+      std::cout << "    linearisation " << k + 1 << ": "
+                << (l.damping > 0 ? "damped least-squares step (lambda " + number_text(l.damping) + ")"
+                                  : std::string(k == 0 ? "seed 000's step" : "the estimator's step"))
+                << ", residual rms "
                 << 1e3 * std::sqrt(l.rss / rows) << " um (predicted " << 1e3 * std::sqrt(l.rss_predicted / rows)
                 << " um)\n";
     }

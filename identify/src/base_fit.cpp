@@ -24,17 +24,6 @@ bool usable(const PoseRow& r) { return r.status.empty() || r.status == "ok"; }
 
 }  // namespace
 
-VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) {
-  // Column-scaled, rank-revealing: a column of zeros or one in the span of
-  // the others gets the minimum-norm share (0).
-  VectorXd scale(X.cols());
-  for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
-  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
-  cod.setThreshold(1e-10);
-  cod.compute(X * scale.cwiseInverse().asDiagonal());
-  return scale.cwiseInverse().asDiagonal() * cod.solve(y);
-}
-
 namespace {
 
 // The joints the model drives: the row's q1..q6 (the commands sent, or the
@@ -111,6 +100,17 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   // as B to rounding) — a few thousand operations where a full 6 × 150 B
   // costs a hundred times more; the joint map needs twelve of them per node.
   twist_reference_ = hybrid_error_reference(comp_.nominal, HybridErrorModelOptions().up_split);
+}
+
+bool HybridBaseFit::start_from_the_better(const PoseTable& data) {
+  const BaseModel at_fine = evaluate(data, false);
+  const HybridCompensation fine = comp_;
+  step(reference_ - values());
+  const BaseModel at_coarse = evaluate(data, false);
+  const bool coarse = at_coarse.nodes.size() > at_fine.nodes.size() ||
+                      (at_coarse.nodes.size() == at_fine.nodes.size() && objective(at_coarse) < objective(at_fine));
+  if (!coarse) comp_ = fine;
+  return coarse;
 }
 
 VectorXd HybridBaseFit::values() const {
@@ -235,25 +235,37 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   const double penalty = fit.penalty();
   BaseModel base;
   int steps = 0;
-  double previous_objective = std::numeric_limits<double>::infinity();
-  HybridCompensation previous = fit.state();
-  const int max_steps = finish || estimator == "ridge" ? 6 : 0;
+  const bool iterate = finish || estimator == "ridge";
+  if (iterate) fit.start_from_the_better(data);
+  // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
+  // lower the objective (Damping): 6 plain steps were enough wherever seed
+  // 000's step started near the minimum; from the coarse machine the damped
+  // steps need more.
+  const int max_steps = iterate ? 40 : 0;
+  Damping damping;
+  double accepted_objective = std::numeric_limits<double>::infinity();
+  HybridCompensation accepted = fit.state();
+  MatrixXd H;
+  VectorXd y;
   std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
-  for (; steps < max_steps; ++steps) {
+  for (int iteration = 0; iteration < max_steps; ++iteration) {
     base = fit.evaluate(data, false);
     const double objective = fit.objective(base);
-    if (steps == 0) modelled = base.nodes.size();
-    if (objective > previous_objective || base.nodes.size() < modelled) {  // a step that does not lower the objective is undone
-      fit.restore(previous);  // evaluated after the loop
-      break;
+    if (iteration == 0) modelled = base.nodes.size();
+    if (!(objective <= accepted_objective) || base.nodes.size() < modelled) {  // not lower: undone, damped more
+      fit.restore(accepted);  // evaluated after the loop
+      if (!damping.refused()) break;
+      fit.step(scaled_least_squares(H, y, damping.lambda));
+      continue;
     }
-    previous_objective = objective;
-    previous = fit.state();
+    if (iteration > 0) damping.accepted();
+    accepted_objective = objective;
+    accepted = fit.state();
     Index rows = 0;
     for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
     const Index penalty_rows = penalty > 0 ? p : 0;
-    MatrixXd H(rows + penalty_rows, p);
-    VectorXd y(rows + penalty_rows);
+    H.resize(rows + penalty_rows, p);
+    y.resize(rows + penalty_rows);
     Index r = 0;
     for (const NodeData& n : base.nodes) {
       if (n.test) continue;
@@ -265,10 +277,12 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
       H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
       y.tail(p) = -std::sqrt(penalty) * fit.away();
     }
-    const VectorXd delta = scaled_least_squares(H, y);
-    if ((H * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
+    const VectorXd delta = scaled_least_squares(H, y, damping.lambda);
+    if (damping.lambda == 0 && (H * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
     fit.step(delta);
+    ++steps;
   }
+  fit.restore(accepted);
   base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
   fit.finish(base, data.file, steps);
   return base;

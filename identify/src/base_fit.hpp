@@ -17,6 +17,7 @@
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
+#include "least_squares_step.hpp"
 
 namespace kincal::identify::detail {
 
@@ -50,11 +51,6 @@ struct BaseModel {
   Eigen::VectorXd column_away;
 };
 
-// The column-scaled least-squares step (rank-revealing COD; a zero or
-// collinear column gets no share): the one solve of every Gauss–Newton step
-// of the base and effect fits.
-Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);
-
 // The hybrid's base fit as a state: seed 000's coarse + fine estimate on the
 // start table (calibrate_hybrid, once), then evaluated on any table (the
 // measurements corrected for effects at the current effect values) and
@@ -73,6 +69,15 @@ class HybridBaseFit {
   void step(const Eigen::VectorXd& delta);     // χ += delta
   HybridCompensation state() const { return comp_; }
   void restore(const HybridCompensation& s) { comp_ = s; }
+  // Seed 000's fine stage is one linear step from the coarse machine. Where
+  // an unmodelled effect is almost in the span of the base's ill-conditioned
+  // combinations, that step can land millimetres away where the first-order
+  // model no longer holds (UPS-actuator scale s = ±5e-4: an encoder offset
+  // moved 30 mm, every gauge target 5 mm off). Then the fit starts from the
+  // coarse machine itself: of the two, the one that models more nodes of
+  // `data`, then the lower objective. Returns true when it chose the coarse
+  // machine.
+  bool start_from_the_better(const PoseTable& data);
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const;
   // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².

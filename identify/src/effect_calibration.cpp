@@ -243,49 +243,50 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
                             const EffectCalibrationOptions& options, detail::HybridBaseFit& fit, EffectValues& values,
                             EffectCalibrationReport& rep) {
   const int max_iterations = 4 * options.max_passes;
-  constexpr int kMaxHalvings = 10;
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
   double accepted_objective = std::numeric_limits<double>::infinity();
   HybridCompensation accepted_state = fit.state();
   EffectValues accepted_values = values;
-  VectorXd delta;
-  double t = 1;
-  int halvings = 0;
+  MatrixXd X;
+  VectorXd y;
+  detail::Damping damping;
   std::size_t modelled = 0;
-  auto apply = [&](double fraction) {
-    fit.step(fraction * delta.head(p));
+  auto apply = [&](const VectorXd& delta) {
+    fit.step(delta.head(p));
     Index c = p;
     for (const Effect* e : list) {
       VectorXd& v = values.values[e->name()];
       const std::vector<bool>& h = held.at(e->name());
       for (Index j = 0; j < v.size(); ++j)
-        if (!h[std::size_t(j)]) v(j) += fraction * delta(c++);
+        if (!h[std::size_t(j)]) v(j) += delta(c++);
     }
   };
+  auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
+  fit.start_from_the_better(corrected());
+  accepted_state = fit.state();
   detail::BaseModel base;
+  // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
+  // not lower the objective (detail::Damping).
   for (int it = 0; it < max_iterations; ++it) {
-    base = fit.evaluate(detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), true);
+    base = fit.evaluate(corrected(), true);
     const double objective = fit.objective(base);
     if (modelled == 0) modelled = base.nodes.size();
     if (!(objective <= accepted_objective) || base.nodes.size() < modelled) {
       fit.restore(accepted_state);
       values = accepted_values;
-      if (delta.size() == 0 || ++halvings > kMaxHalvings) break;
-      t *= 0.5;
-      apply(t);
+      if (X.size() == 0 || !damping.refused()) break;
+      apply(detail::scaled_least_squares(X, y, damping.lambda));
       continue;
     }
+    if (it > 0) damping.accepted();
     accepted_objective = objective;
     accepted_state = fit.state();
     accepted_values = values;
-    halvings = 0;
-    t = 1;
     MatrixXd H;
-    VectorXd y;
     stack(base, false, H, y);
     rep.rms_cal_um.push_back(rms_um(y));
-    MatrixXd X = joint_design(robot, list, held, base, H);
+    X = joint_design(robot, list, held, base, H);
     if (penalty > 0) {
       const Index n = X.rows();
       X.conservativeResize(n + p, Eigen::NoChange);
@@ -294,12 +295,12 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
       y.conservativeResize(n + p);
       y.tail(p) = -std::sqrt(penalty) * fit.away();
     }
-    delta = detail::scaled_least_squares(X, y);
+    const VectorXd delta = detail::scaled_least_squares(X, y, damping.lambda);
     rep.passes += 1;
     // Converged when the step would lower the objective by less than a
     // millionth: below the noise of any data set by far.
-    if ((X * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
-    apply(1.0);
+    if (damping.lambda == 0 && (X * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
+    apply(delta);
   }
   // The base at the accepted iterate (the last evaluation may belong to a
   // step that was undone).

@@ -3,6 +3,8 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 
+#include "least_squares_step.hpp"
+
 #include "kincal/identify/outliers.hpp"
 
 #include <Eigen/QR>
@@ -428,29 +430,55 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     l.rss = res.squaredNorm();
     out.linearisations.push_back(l);
     bool valid = l.rss <= tolerance * l.rss_predicted + floor_rss;
+    // Every later step is a descent. The estimator's step (from the point
+    // reached toward its solution at the new linearisation) is taken when it
+    // lowers the model's residual; otherwise Levenberg–Marquardt's damped
+    // least-squares step (detail::Damping) with more damping until one does.
+    // Halving the step instead shrinks every direction alike and crept along
+    // the poorly determined ones (114 µm after 20 linearisations on
+    // UPS-actuator-scale data). The first step is measured against the
+    // coarse machine (χ = 0, residual r): when even seed 000's step raises
+    // the residual there (an unmodelled effect pulled the ill-conditioned
+    // combinations millimetres away: 1651 µm after it from 130 µm at the
+    // coarse machine on that data), the iteration restarts at the coarse
+    // machine instead of climbing from the step.
+    if (!valid && options.max_linearisations > 1 && res.squaredNorm() > r.squaredNorm()) {
+      at.setZero();
+      res = r;
+      Hk = H;
+    }
+    detail::Damping damping;
+    MatrixXd Hkept(9 * N, static_cast<Index>(out.kept.size()));
     while (!valid && static_cast<int>(out.linearisations.size()) < options.max_linearisations) {
       set_problem(Hk, res, kept_values(at));
       solve();
-      const VectorXd full = out.chi(chosen);
+      VectorXd next = out.chi(chosen);
       const double predicted = out.estimate(chosen)->residual.squaredNorm();
-      double step = 1;
-      bool accepted = false;
-      for (int halving = 0; halving < 12; ++halving, step /= 2) {
-        if (model_residual(at + step * (full - at), trial_res, &trial_H) &&
-            trial_res.squaredNorm() <= 4 * res.squaredNorm()) {
-          accepted = true;
-          break;
-        }
+      bool accepted = damping.lambda == 0 && model_residual(next, trial_res, &trial_H) &&
+                      trial_res.squaredNorm() < res.squaredNorm();
+      if (!accepted) {
+        for (std::size_t c = 0; c < out.kept.size(); ++c) Hkept.col(static_cast<Index>(c)) = Hk.col(out.kept[c]);
+        if (damping.lambda == 0) damping.refused();  // the estimator's step failed: start damping
+        do {
+          const VectorXd delta = detail::scaled_least_squares(Hkept, res, damping.lambda);
+          next = at;
+          for (std::size_t c = 0; c < out.kept.size(); ++c) next(out.kept[c]) += delta(static_cast<Index>(c));
+          accepted = model_residual(next, trial_res, &trial_H) && trial_res.squaredNorm() < res.squaredNorm();
+        } while (!accepted && damping.refused());
+      } else {
+        damping.lambda = 0;
       }
-      if (!accepted) break;  // no step keeps every node: stay where the last one ended
-      at += step * (full - at);
+      if (!accepted) break;  // no step lowers the residual: stay where the last one ended
+      const bool full = damping.lambda == 0;
+      at = next;
       res = trial_res;
       Hk = trial_H;
-      l.step_fraction = step;
+      l.damping = full ? 0.0 : damping.lambda;
       l.rss_predicted = predicted;
       l.rss = res.squaredNorm();
       out.linearisations.push_back(l);
-      valid = step == 1 && l.rss <= tolerance * l.rss_predicted + floor_rss;
+      valid = full && l.rss <= tolerance * l.rss_predicted + floor_rss;
+      damping.accepted();
     }
     out.fine_linearisation_valid = valid;
     if (!valid && out.linearisations.size() > 1) {

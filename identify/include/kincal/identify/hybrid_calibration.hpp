@@ -87,7 +87,10 @@ struct HybridCalibrationOptions {
 // One linearisation of the fine stage (the first is seed 000's step from the
 // coarse machine).
 struct HybridFineLinearisation {
-  double step_fraction = 1;  // of the estimator's step from the previous point (halved when it failed)
+  // 0: the estimator's step from the previous point; else the
+  // Levenberg–Marquardt damping λ of the least-squares step taken because
+  // the estimator's step did not lower the residual.
+  double damping = 0;
   double rss_predicted = 0;  // the linearised problem's residual sum of squares at its estimate, mm²
   double rss = 0;            // the model's residual sum of squares at the point reached, mm²
 };
