@@ -357,9 +357,8 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   std::optional<detail::HybridBaseFit> hybrid;
   const bool choose_k = options.estimator != "ols" && !(options.ridge_k > 0);
   auto fit = [&]() {
-    if (!robot.is_hybrid() || list.empty()) {
-      rep.base = robot.is_hybrid() ? "seed 000's coarse + fine model finished by Gauss-Newton ("+ std::string(options.estimator == "ridge" ? "ridge" : "OLS") + ")"
-                                   : "seed 001's iterated least squares (OLS)";
+    if (!robot.is_hybrid()) {
+      rep.base = "seed 001's iterated least squares (OLS)";
       return alternate(robot, data, nodes, list, held, options, values, rep, ridge_k);
     }
     hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? "ridge" : "ols", true, options.ridge_k);
@@ -376,7 +375,8 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     hybrid->set_penalty(k);
     ridge_k = k;
     rep.base = "ridge toward seed 000's coarse machine, k = " + number(k) +
-               " chosen by GCV on base + effects at the solution (k from 1e-12, OLS, to 1e4)";
+               " chosen by GCV on base" + (list.empty() ? "" : " + effects") +
+               " at the solution (k from 1e-12, OLS, to 1e4)";
     return joint_fit(robot, data, nodes, list, held, options, *hybrid, values, rep);
   };
   detail::BaseModel base = fit();

@@ -33,7 +33,7 @@ struct EffectCalibrationOptions {
   // Backward elimination of effect parameters: while the least significant
   // free one fails its t test in the joint fit (Bonferroni: p × free < alpha),
   // it is held at 0 and the fit repeated. 0 keeps every parameter free.
-  double alpha = 0.05;
+  double alpha = 0.01;
 };
 
 // An effect parameter held at 0 by the elimination, with its test.
