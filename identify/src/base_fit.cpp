@@ -71,10 +71,11 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
           : estimator == "ols" || finish     ? HybridFineEstimator::Ols
                                              : HybridFineEstimator::Liu;
   HybridCalibrationOptions opt;
-  // Seed 000's single fine step and its estimates as they are: the fit
-  // finishes it by its own Gauss–Newton steps (OLS or ridge), which the
-  // fine stage's re-linearisation along Liu's path would only move away from.
-  opt.max_linearisations = 1;
+  // Seed 000's fine stage by the fit's estimator, with its re-linearisation
+  // where one step does not hold (millimetre source errors, or an effect
+  // that pulls the step far: the damped steps of calibrate_hybrid); on data
+  // where one step holds, seed 000's single step as before.
+  opt.estimator = fine_;
   opt.liu_fallback = HybridFineEstimator::None;
   opt.test_nodes = false;  // the base fit's own screen runs on its final model (outliers.hpp), not here
   cal_ = calibrate_hybrid(robot, data, opt);
