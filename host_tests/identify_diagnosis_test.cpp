@@ -246,7 +246,7 @@ TEST_P(HiddenEffect, IsNamedFirstAcceptedAndCompensated) {
   // the floor is the joint fit's base with k by GCV on clean data (1.40 µm;
   // 2.24 µm with the OLS-finished base it replaced) and issue #14 asks for
   // 1.25× of it: measured scale 1.14×, backlash 1.06×, compliance 1.11×,
-  // thermal 1.13×, cyclic 1.06× (backlash and compliance were 1.60× and
+  // thermal 1.12×, cyclic 1.12× (backlash and compliance were 1.60× and
   // 1.84× until the effect parameters were held at the diagnosis's 0.01).
   EXPECT_LT(compensated, (which == "stewart" ? 1.5 : 1.25) * floor) << effect;
   RecordProperty("uncompensated_um", std::to_string(uncompensated));
@@ -562,9 +562,8 @@ TEST(IdentifyWithEffects, ComplianceAndScaleTogetherFitLikeComplianceAlone) {
   // The base model puts the hybrid's structural twist at the pose the joints
   // reach, so the effect columns carry its change with the joints
   // (NodeData::joint_map); without that term the alternation kept three
-  // scale parameters and ended at 9.75 µm. Measured: 5.24 µm alone, 5.58 µm
-  // together (five scale parameters stay free, the fit barely moves: the
-  // scale is 98 % confounded with the base).
+  // scale parameters and ended at 9.75 µm. Measured with the joint fit:
+  // 5.12 µm alone and together (5.24 and 5.58 µm under the alternation).
   EXPECT_LT(together.rms_test_um_final, 1.1 * alone.rms_test_um_final);
   const Eigen::VectorXd& k = both.effects.values.at("compliance");
   EXPECT_NEAR(k(1), -0.3, 0.1);
@@ -592,7 +591,7 @@ TEST(IdentifyWithEffects, HybridDefaultBaseCompensatesAtLeastAsWellAsOls) {
     std::printf("  hybrid %s: compensated %.2f um with the chosen base, %.2f um with OLS\n", effect.c_str(), chosen,
                 with_ols);
     // Measured chosen / OLS: scale 1.60 / 2.43, backlash 1.48 / 3.10,
-    // compliance 1.56 / 3.41, thermal 1.58 / 2.28, cyclic 1.49 / 2.28 µm
+    // compliance 1.56 / 3.41, thermal 1.57 / 2.17, cyclic 1.57 / 2.13 µm
     // (the alternation's best of OLS and ridge was 2.43, 2.60, 3.41, 1.69,
     // 1.36; clean data 1.40 with the chosen base).
     EXPECT_LE(chosen, 1.05 * with_ols) << effect;

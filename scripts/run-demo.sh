@@ -113,7 +113,10 @@ echo "   3 layers x 7 x 7 nodes, pure translation; layers 1 and 3 calibrate, lay
 $kincal simulate --robot hybrid-seed000 --poses examples/hybrid-seed000/poses.csv \
   --errors examples/hybrid-seed000/errors.csv --noise-mm 0.005 --noise-rad 0.000005 --seed 2026 \
   --out out/hybrid_measured.csv
-$kincal identify --robot hybrid-seed000 --data out/hybrid_measured.csv \
+# --estimator liu: seed 000's own fine stage (Liu's estimator, Eq. (13)/(14)),
+# as the paper has it; without it identify finishes the step by Gauss-Newton
+# with a ridge base (docs/identify.md).
+$kincal identify --robot hybrid-seed000 --data out/hybrid_measured.csv --estimator liu \
   --out out/hybrid_model.json --json out/hybrid_summary.json
 grep -E '^(id|L2)' examples/hybrid-seed000/poses.csv > out/hybrid_test_poses.csv
 $kincal compensate --robot hybrid-seed000 --model out/hybrid_model.json \

@@ -248,7 +248,7 @@ int run_errors(const std::string& data, const std::string& reference, bool per_r
 }
 
 struct IdentifyArgs {
-  std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / liu (hybrid)
+  std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / the default base (hybrid)
   bool keep_outliers = false;
   std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
   Eigen::Index pcr_components = 0;        // 0: by GCV
@@ -685,7 +685,7 @@ int run(int argc, char** argv) {
   identify->add_option("--robot", ident.robot, "built-in robot name or robot description file")->required();
   identify->add_option("--data", ident.data, "measurement CSV")->required();
   identify->add_option("--out", ident.out, "MODEL.json to write")->required();
-  identify->add_option("--estimator", ident.estimator, "ols (6-UPS default), liu (hybrid default), ridge, pcr; with --effects: the 6-UPS ols; the hybrid ridge with k by GCV on base + effects (default), ols, or ridge with --ridge-k")
+  identify->add_option("--estimator", ident.estimator, "6-UPS: ols (default), ridge, pcr. Hybrid: by default seed 000's estimate finished by Gauss-Newton with a ridge base, k by GCV at the solution; liu, ols, ridge, pcr: seed 000's fine stage with that estimator as it is. With --effects: the 6-UPS ols; the hybrid the default base, ols, or ridge with --ridge-k")
       ->check(CLI::IsMember({"ols", "ridge", "liu", "pcr"}));
   identify->add_option("--ridge-k", ident.ridge_k,
                        "ridge's k: gcv (generalized cross-validation, default), hkb (Hoerl-Kennard-Baldwin) or a "
@@ -709,7 +709,7 @@ int run(int argc, char** argv) {
   identify->add_option("--effects", ident.effects, "effects to include, e.g. scale,thermal ('kincal effects' lists them)");
   identify->add_option("--effect-alpha", ident.effect_alpha,
                        "with --effects: an effect parameter not significant at this family-wise level (t test in the "
-                       "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.05)")
+                       "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.01)")
       ->check(kincal_app::decimal(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
   identify->add_flag("--keep-outliers", ident.keep_outliers,
