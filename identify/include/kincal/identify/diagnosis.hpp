@@ -24,7 +24,10 @@ struct DiagnoseOptions {
   std::optional<double> noise_um;    // σ of a measured position coordinate (µm), if known
   std::optional<double> noise_urad;  // σ of a measured orientation coordinate (µrad; 6-UPS pose), if known
   double alpha = 0.01;             // family-wise significance level (Holm)
-  double min_test_gain = 0.05;     // an effect must cut the held-out RMS by ≥ 5 % to be accepted
+  // An effect must cut the held-out RMS by this much to be accepted — or by
+  // half of what separates it from the noise if less, and by anything where
+  // the model is consistent with the noise (diagnosis.md, step 4).
+  double min_test_gain = 0.05;
   std::vector<std::string> candidates;  // empty: every registered effect
   bool progress = false;                // progress lines on stderr
   // Cal nodes the outlier screen flags (identify/outliers.hpp, on the final
