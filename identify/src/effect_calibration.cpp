@@ -279,10 +279,13 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
       apply(detail::scaled_least_squares(X, y, damping.lambda));
       continue;
     }
+    // A damped step that gains less than a thousandth: stop (see hybrid_base).
+    const bool crawling = damping.lambda > 0 && accepted_objective - objective < 1e-3 * accepted_objective;
     if (it > 0) damping.accepted();
     accepted_objective = objective;
     accepted_state = fit.state();
     accepted_values = values;
+    if (crawling) break;
     MatrixXd H;
     stack(base, false, H, y);
     rep.rms_cal_um.push_back(rms_um(y));
