@@ -253,6 +253,18 @@ TEST_P(HiddenEffect, IsNamedFirstAcceptedAndCompensated) {
   RecordProperty("compensated_um", std::to_string(compensated));
 }
 
+// The injected settings of several single-effect cases together, and their
+// label ("thermal+scale").
+Settings combined(const std::string& which, const std::vector<std::string>& effects, std::string& label) {
+  Settings settings;
+  for (const std::string& e : effects) {
+    const Settings& s = injected().at(which).at(e);
+    settings.insert(settings.end(), s.begin(), s.end());
+    label += (label.empty() ? "" : "+") + e;
+  }
+  return settings;
+}
+
 // Issue #11: two and three library effects present at once (6-UPS; the
 // hybrid's pairs are issue #14's). Each at the size of its single-effect case
 // above; the data come from `simulate` with the same effect code the
@@ -263,14 +275,8 @@ TEST(SeveralEffects, AreAllNamedExplainedAndCompensatedNearTheFloor) {
   const double floor = clean_compensated_um("stewart");
   for (const std::vector<std::string>& effects :
        {std::vector<std::string>{"thermal", "scale"}, std::vector<std::string>{"thermal", "scale", "backlash"}}) {
-    Settings settings;
     std::string label;
-    for (const std::string& e : effects) {
-      const Settings& s = injected().at("stewart").at(e);
-      settings.insert(settings.end(), s.begin(), s.end());
-      label += (label.empty() ? "" : "+") + e;
-    }
-    const ki::EffectValues truth = values_of(m.nominal, settings);
+    const ki::EffectValues truth = values_of(m.nominal, combined("stewart", effects, label));
     const ki::PoseTable data = simulate_with(m, truth);
     const ki::Diagnosis d = run_diagnosis(m, data);
     std::vector<std::string> accepted = d.accepted, wanted = effects;
@@ -299,14 +305,8 @@ TEST(SeveralEffects, HybridPairsAreNamedAndCompensatedNearTheFloor) {
   const double floor = clean_compensated_um("hybrid");
   for (const std::vector<std::string>& effects :
        {std::vector<std::string>{"compliance", "scale"}, std::vector<std::string>{"backlash", "thermal"}}) {
-    Settings settings;
     std::string label;
-    for (const std::string& e : effects) {
-      const Settings& s = injected().at("hybrid").at(e);
-      settings.insert(settings.end(), s.begin(), s.end());
-      label += (label.empty() ? "" : "+") + e;
-    }
-    const ki::EffectValues truth = values_of(m.nominal, settings);
+    const ki::EffectValues truth = values_of(m.nominal, combined("hybrid", effects, label));
     const ki::PoseTable data = simulate_with(m, truth);
     const ki::Diagnosis d = run_diagnosis(m, data);
     std::vector<std::string> accepted = d.accepted;
