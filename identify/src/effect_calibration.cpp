@@ -123,9 +123,7 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
 // columns are left out of the step).
 detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
-                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep,
-                            double& ridge_k) {
-  const std::string base_estimator = options.estimator == "ridge" ? "ridge" : "ols";
+                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep) {
   detail::BaseModel base;
   EffectValues previous = values;
   bool halved = false;
@@ -133,10 +131,8 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   for (int pass = 0; pass < options.max_passes; ++pass) {
     const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
     // The base is fitted to its least-squares minimum (what the linear [H G]
-    // step assumes; for the hybrid seed 000's estimate finished by
-    // Gauss–Newton), here and for the final model.
-    base = detail::fit_base(robot, corrected, nodes, base_estimator, true, ridge_k);
-    ridge_k = base.ridge_k;
+    // step assumes), here and for the final model.
+    base = detail::fit_base(robot, corrected, nodes, "ols", true);
     MatrixXd H;
     VectorXd y;
     stack(base, false, H, y);
@@ -159,17 +155,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
     // One linear step on [H G] (G: the effects' free columns), column-scaled,
     // by a rank-revealing orthogonal decomposition; only the effect part is
     // kept, the base is refitted nonlinearly in the next pass.
-    MatrixXd X = joint_design(robot, list, held, base, H);
-    if (ridge_k > 0) {
-      // The base's penalty rows √k·(χ − χ_coarse): the step minimises the
-      // same objective as the base fit (effects unpenalised).
-      const Index p = base.parameters, n = X.rows();
-      X.conservativeResize(n + p, Eigen::NoChange);
-      X.bottomRows(p).setZero();
-      X.bottomLeftCorner(p, p) = std::sqrt(ridge_k) * MatrixXd::Identity(p, p);
-      y.conservativeResize(n + p);
-      y.tail(p) = -std::sqrt(ridge_k) * base.column_away;
-    }
+    const MatrixXd X = joint_design(robot, list, held, base, H);
     const VectorXd delta = detail::scaled_least_squares(X, y);
     // Convergence on the effect's contribution to the residual (scaled update).
     VectorXd scaled_effect_step = delta.tail(X.cols() - H.cols());
@@ -188,7 +174,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   // the loop may belong to an update that was undone or not yet applied).
   if (!list.empty())
     base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
-                            base_estimator, true, ridge_k);
+                            "ols", true);
   return base;
 }
 
@@ -341,9 +327,6 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   }
 
   EffectCalibrationReport rep;
-  // Hybrid ridge base: k as given, else chosen by GCV in the first base fit,
-  // then kept (every pass minimises the same objective).
-  double ridge_k = options.ridge_k;
   // The hybrid: one joint Gauss–Newton of base and effects from seed 000's
   // estimate (calibrate_hybrid once); the 6-UPS: the alternation, whose base
   // fit (seed 001's iterated LS) converges in a few rounds.
@@ -362,7 +345,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   auto fit = [&]() {
     if (!robot.is_hybrid()) {
       rep.base = "seed 001's iterated least squares (OLS)";
-      return alternate(robot, data, nodes, list, held, options, values, rep, ridge_k);
+      return alternate(robot, data, nodes, list, held, options, values, rep);
     }
     hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? "ridge" : "ols", true, options.ridge_k);
     detail::BaseModel b = joint_fit(robot, data, nodes, list, held, options, *hybrid, values, rep);
@@ -376,7 +359,6 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     stack(b, false, H, y);
     const double k = joint_gcv_k(joint_design(robot, list, held, b, H), y + H * hybrid->away(), H.cols());
     hybrid->set_penalty(k);
-    ridge_k = k;
     rep.base = "ridge toward seed 000's coarse machine, k = " + number(k) +
                " chosen by GCV on base" + (list.empty() ? "" : " + effects") +
                " at the solution (k from 1e-12, OLS, to 1e4)";
