@@ -27,7 +27,7 @@ struct EffectCalibrationOptions {
   // describes the machine (docs/diagnosis.md, measured per effect). Other
   // values throw InputError.
   std::string estimator;
-  double ridge_k = 0;  // "ridge": the penalty's k; 0 chooses it by seed 000's fine-stage GCV
+  double ridge_k = 0;  // hybrid: the base penalty's k as given; 0 chooses it by GCV on base + effects at the solution
   int max_passes = 6;
   double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)
   // Backward elimination of effect parameters: while the least significant
