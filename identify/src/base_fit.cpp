@@ -91,6 +91,7 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   // Gauss–Newton on the augmented rows √k·I.
   comp_ = cal_.compensation(fine_);
   if (comp_.structural.size() == 0) comp_.structural = VectorXd::Zero(HybridErrorModel::kParameterCount);
+  seed_estimate_ = comp_;
   p_ = Index(cal_.kept.size());
   penalty_ = !ridge_ ? 0.0 : ridge_k > 0 ? ridge_k : cal_.ridge.ridge_k;
   reference_.resize(p_);  // the coarse machine: the fine stage's starting point
@@ -105,15 +106,25 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   twist_reference_ = hybrid_error_reference(comp_.nominal, HybridErrorModelOptions().up_split);
 }
 
-bool HybridBaseFit::start_from_the_better(const PoseTable& data) {
-  const BaseModel at_fine = evaluate(data, false);
-  const HybridCompensation fine = comp_;
+bool HybridBaseFit::start_from_the_best(const PoseTable& data, const std::vector<HybridCompensation>& candidates) {
+  std::vector<HybridCompensation> states = candidates;
+  comp_ = seed_estimate_;
   step(reference_ - values());
-  const BaseModel at_coarse = evaluate(data, false);
-  const bool coarse = at_coarse.nodes.size() > at_fine.nodes.size() ||
-                      (at_coarse.nodes.size() == at_fine.nodes.size() && objective(at_coarse) < objective(at_fine));
-  if (!coarse) comp_ = fine;
-  return coarse;
+  states.push_back(comp_);  // the coarse machine
+  std::size_t best = 0, best_nodes = 0;
+  double best_objective = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    comp_ = states[i];
+    const BaseModel at = evaluate(data, false);
+    const double objective_here = objective(at);
+    if (at.nodes.size() > best_nodes || (at.nodes.size() == best_nodes && objective_here < best_objective)) {
+      best = i;
+      best_nodes = at.nodes.size();
+      best_objective = objective_here;
+    }
+  }
+  comp_ = states[best];
+  return best + 1 == states.size();
 }
 
 VectorXd HybridBaseFit::values() const {

@@ -77,7 +77,12 @@ class HybridBaseFit {
   // coarse machine itself: of the two, the one that models more nodes of
   // `data`, then the lower objective. Returns true when it chose the coarse
   // machine.
-  bool start_from_the_better(const PoseTable& data);
+  bool start_from_the_better(const PoseTable& data) { return start_from_the_best(data, {state()}); }
+  // The same choice among `candidates` and the coarse machine (ties: the
+  // earlier candidate).
+  bool start_from_the_best(const PoseTable& data, const std::vector<HybridCompensation>& candidates);
+  // Seed 000's coarse + fine estimate this fit was constructed from.
+  const HybridCompensation& seed_estimate() const { return seed_estimate_; }
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const;
   // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².
@@ -92,7 +97,7 @@ class HybridBaseFit {
   bool ridge_, finish_;
   HybridFineEstimator fine_ = HybridFineEstimator::Ols;
   HybridCalibration cal_;
-  HybridCompensation comp_;
+  HybridCompensation comp_, seed_estimate_;
   Eigen::Index p_ = 0;
   double penalty_ = 0;
   Eigen::VectorXd reference_;

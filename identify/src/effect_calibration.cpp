@@ -226,7 +226,8 @@ double joint_gcv_k(const MatrixXd& X, const VectorXd& z, Index p) {
 
 detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
-                            const EffectCalibrationOptions& options, detail::HybridBaseFit& fit, EffectValues& values,
+                            const EffectCalibrationOptions& options, detail::HybridBaseFit& fit,
+                            const std::vector<HybridCompensation>& starts, EffectValues& values,
                             EffectCalibrationReport& rep) {
   const int max_iterations = 4 * options.max_passes;
   const Index p = fit.parameters();
@@ -249,7 +250,7 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
     }
   };
   auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
-  fit.start_from_the_better(corrected());
+  fit.start_from_the_best(corrected(), starts);
   accepted_state = fit.state();
   detail::BaseModel base;
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
@@ -327,19 +328,20 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   }
 
   EffectCalibrationReport rep;
-  // The hybrid: one joint Gauss–Newton of base and effects from seed 000's
-  // estimate (calibrate_hybrid once); the 6-UPS: the alternation, whose base
-  // fit (seed 001's iterated LS) converges in a few rounds.
-  // The hybrid: one joint Gauss–Newton of base and effects (joint_fit) from
-  // seed 000's start on the raw data; its base is chosen by joint_gcv_k at
-  // the solution unless the options fix it (ols: k = 0; ridge with
-  // --ridge-k: that k), then fitted again with that k. Each elimination
-  // round starts afresh from seed 000's start and chooses k again: warm
-  // starts with k kept were measured worse (compliance 3.41 against 2.57 µm
-  // held-out, backlash 2.34 against 2.24: GCV chose k = 0 at the first
-  // solution of the compliance data and never looked again). The 6-UPS:
-  // the alternation, whose base fit (seed 001's iterated LS) converges in a
-  // few rounds and is not shrunk.
+  // The hybrid: one joint Gauss–Newton of base and effects (joint_fit); its
+  // base is chosen by joint_gcv_k at the OLS solution unless the options fix
+  // it (ols: k = 0; ridge with --ridge-k: that k), then fitted again with
+  // that k from there. Each elimination round fits OLS again and chooses k
+  // again: warm starts with k kept were measured worse (compliance 3.41
+  // against 2.57 µm held-out, backlash 2.34 against 2.24: GCV chose k = 0 at
+  // the first solution of the compliance data and never looked again). A
+  // round starts from the better of seed 000's estimate on the raw data, the
+  // coarse machine and the previous round's solution (its held parameter at
+  // 0): from seed 000's start alone, the damped steps of a later round could
+  // stop short of the minimum (UPS-actuator scale, noise seed 5: RSS 20 %
+  // above the previous round's with one parameter of t = −0.8 fewer, and the
+  // base 8 mm out). The 6-UPS: the alternation, whose base fit (seed 001's
+  // iterated LS) converges in a few rounds and is not shrunk.
   std::optional<detail::HybridBaseFit> hybrid;
   const bool choose_k = options.estimator != "ols" && !(options.ridge_k > 0);
   auto fit = [&]() {
@@ -347,8 +349,15 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
       rep.base = "seed 001's iterated least squares (OLS)";
       return alternate(robot, data, nodes, list, held, options, values, rep);
     }
-    hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? "ridge" : "ols", true, options.ridge_k);
-    detail::BaseModel b = joint_fit(robot, data, nodes, list, held, options, *hybrid, values, rep);
+    std::vector<HybridCompensation> starts;
+    if (!hybrid) {
+      hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? "ridge" : "ols", true, options.ridge_k);
+      starts = {hybrid->seed_estimate()};
+    } else {
+      starts = {hybrid->seed_estimate(), hybrid->state()};
+      hybrid->set_penalty(options.ridge_k);
+    }
+    detail::BaseModel b = joint_fit(robot, data, nodes, list, held, options, *hybrid, starts, values, rep);
     if (!choose_k) {
       rep.base = options.ridge_k > 0 ? "ridge toward seed 000's coarse machine, k = " + number(options.ridge_k) + " as given"
                                      : "OLS (as asked)";
@@ -362,7 +371,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     rep.base = "ridge toward seed 000's coarse machine, k = " + number(k) +
                " chosen by GCV on base" + (list.empty() ? "" : " + effects") +
                " at the solution (k from 1e-12, OLS, to 1e4)";
-    return joint_fit(robot, data, nodes, list, held, options, *hybrid, values, rep);
+    return joint_fit(robot, data, nodes, list, held, options, *hybrid, {hybrid->state()}, values, rep);
   };
   detail::BaseModel base = fit();
   // Backward elimination: an effect parameter the data cannot tell from the

@@ -54,6 +54,10 @@ struct EffectTest {
   double p_value = 1;        // raw
   double p_adjusted = 1;     // Holm-adjusted
   double confounded = 0;     // fraction (0–1) of the effect's column energy inside the model's span
+  // Mallows' Cp of the model with this effect, RSS/σ² + 2·rank (σ: the
+  // noise, else the current model's residual scale): the stepwise search
+  // takes, of the effects that qualify, the one of lowest Cp.
+  double cp = 0;
   RoleRms rms_after;         // model + this effect, refitted on cal
   double test_gain = 0;      // 1 − rms_after.test / rms_before.test (0 if no test rows)
   bool accepted = false;
