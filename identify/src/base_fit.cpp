@@ -127,6 +127,17 @@ bool HybridBaseFit::start_from_the_best(const PoseTable& data, const std::vector
   return best + 1 == states.size();
 }
 
+void HybridBaseFit::recentre(const PoseTable& data) {
+  HybridCalibrationOptions opt;
+  opt.fine = false;
+  opt.test_nodes = false;
+  const HybridCalibration coarse = calibrate_hybrid(*robot_, data, opt);
+  for (Index j = 0; j < p_; ++j) {
+    const Index idx = cal_.kept[std::size_t(j)];
+    if (idx < HybridErrorModel::kEncoderCount) reference_(j) = coarse.coarse_xi(idx);
+  }
+}
+
 VectorXd HybridBaseFit::values() const {
   VectorXd v(p_);
   for (Index j = 0; j < p_; ++j) {

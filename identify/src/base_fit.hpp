@@ -81,6 +81,8 @@ class HybridBaseFit {
   // The same choice among `candidates` and the coarse machine (ties: the
   // earlier candidate).
   bool start_from_the_best(const PoseTable& data, const std::vector<HybridCompensation>& candidates);
+  // The ridge's centre χ_coarse := seed 000's coarse stage run on `data`.
+  void recentre(const PoseTable& data);
   // Seed 000's coarse + fine estimate this fit was constructed from.
   const HybridCompensation& seed_estimate() const { return seed_estimate_; }
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
