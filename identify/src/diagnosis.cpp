@@ -277,13 +277,114 @@ std::string joint_display_unit(const Robot& robot, int j) { return robot.is_hybr
 
 namespace {
 
-// One diagnosis on the rows given (diagnose() below adds the outlier screen).
-Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  auto progress = [&](const std::string& s) {
+// The stacked problem of each role from a base model's nodes (design H,
+// residual r).
+void build_stacks(const BaseModel& b, Stack& cal_out, Stack& test_out) {
+  Index nc = 0, nt = 0;
+  for (const NodeData& n : b.nodes) (n.test ? nt : nc) += n.r.size();
+  cal_out = Stack{}, test_out = Stack{};
+  cal_out.H.resize(nc, b.parameters), cal_out.y.resize(nc);
+  test_out.H.resize(nt, b.parameters), test_out.y.resize(nt);
+  Index rc = 0, rt = 0;
+  for (std::size_t k = 0; k < b.nodes.size(); ++k) {
+    const NodeData& n = b.nodes[k];
+    Stack& st = n.test ? test_out : cal_out;
+    Index& r = n.test ? rt : rc;
+    st.H.middleRows(r, n.r.size()) = n.H;
+    st.y.segment(r, n.r.size()) = n.r;
+    st.node.push_back(k);
+    r += n.r.size();
+  }
+}
+
+// One diagnosis on the rows given (diagnose() below adds the outlier screen),
+// as the named steps of docs/diagnosis.md "What the diagnosis does": the
+// base fit, the noise, the candidates' columns, the stepwise search, the
+// verdict, the residual per node, and where it sits (by layer, region,
+// joint, covariate). The members are the state one step leaves the next.
+class DiagnosisRun {
+ public:
+  DiagnosisRun(const Robot& r, const PoseTable& t, const DiagnoseOptions& o) : robot(r), data(t), options(o) {}
+
+  Diagnosis run() {
+    const auto start = std::chrono::steady_clock::now();
+    check_inputs();
+    fit_base_model();
+    set_noise();
+    stack_candidates();
+    fit_base_columns();
+    stepwise_search();
+    rank_candidates();
+    read_accepted_values();
+    judge();
+    residual_per_node();
+    prepare_groups();
+    by_layer();
+    by_region();
+    by_joint();
+    by_covariate();
+    outlier_problem();
+    d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return std::move(d);
+  }
+
+ private:
+  void progress(const std::string& s) const {
     if (options.progress) std::cerr << "diagnose: " << s << "\n";
-  };
+  }
+  void check_inputs();
+  void fit_base_model();
+  void set_noise();
+  void stack_candidates();
+  void fit_base_columns();
+  bool consistent_rms(double rss, Index rank, double test_ss, Index test_n) const;
+  bool consistent(const FitResult& f) const { return consistent_rms(f.rss, f.rank, f.r_test.squaredNorm(), f.r_test.size()); }
+  double required_gain(const FitResult& f) const;
+  std::vector<EffectTest> test_candidates(int step) const;
+  void stepwise_search();
+  void relinearise(const std::string& accepted_effect);
+  void rank_candidates();
+  void read_accepted_values();
+  void judge();
+  void residual_per_node();
+  void prepare_groups();
+  ResidualGroup group(const std::string& label, const std::vector<std::size_t>& members, double* excess = nullptr) const;
+  void by_layer();
+  void by_region();
+  void by_joint();
+  void by_covariate();
+  void outlier_problem();
+
+  const Robot& robot;
+  const PoseTable& data;
+  const DiagnoseOptions& options;
   Diagnosis d;
+  std::vector<std::optional<EffectNode>> en;
+  BaseModel base;
+  double orientation_factor = 1.0;
+  Stack cal, test;
+  std::vector<const Effect*> candidates;
+  Index n_cal = 0;
+  FitResult base_fit;
+  double sigma_mm = 0;
+  bool noise_known = false;
+  // The stepwise search's state: the accepted effects, the fit with them,
+  // each candidate's latest test, and the effect values the current
+  // linearisation starts from (re-linearised steps; the final fit's
+  // coefficients are increments on them).
+  std::vector<std::string> accepted;
+  FitResult current;
+  std::map<std::string, EffectTest> latest;
+  std::map<std::string, VectorXd> effect_start;
+  // Per node: the tool-point and joint residuals before (base model) and
+  // after (final model); the final residual's sum of squares and length.
+  std::vector<NodeTwist> before, after;
+  std::vector<double> node_ss;
+  std::vector<Index> node_len;
+  double sigma_used = 0, excess_total = 0;
+};
+
+void DiagnosisRun::check_inputs() {
   d.robot = robot.name;
   d.data_file = data.file;
   d.family = robot.family();
@@ -300,12 +401,16 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
       d.notes.push_back("a single layer (" + std::to_string(*layers.begin()) +
                         "): parameters that act along the layer normal are poorly determined; measure a second layer");
   }
+}
 
+void DiagnosisRun::fit_base_model() {
   progress("fitting the base model on the cal rows");
-  const std::vector<std::optional<EffectNode>> en = effect_nodes(robot, data);
-  BaseModel base = detail::fit_base(robot, data, en, "ols", true);
+  en = effect_nodes(robot, data);
+  base = detail::fit_base(robot, data, en, "ols", true);
   d.base_model = base.description;
+}
 
+void DiagnosisRun::set_noise() {
   // Noise (docs/diagnosis.md "How kincal knows the noise"): positions from
   // --noise-um, else repeated nodes, else neighbouring nodes; a 6-UPS's
   // orientations likewise from --noise-urad. The orientation rows are then
@@ -328,7 +433,7 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
   } else {
     d.noise_um = estimate(false, d.noise_source) * kMicro;
   }
-  double orientation_factor = 1.0;
+  orientation_factor = 1.0;
   if (robot.is_stewart()) {
     if (options.noise_urad) {
       d.noise_urad = *options.noise_urad;
@@ -350,33 +455,15 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
   } else if (options.noise_urad) {
     d.notes.push_back("--noise-urad ignored: the hybrid's gauge measures positions only");
   }
+}
 
-  // Stacks per role, from a base model's nodes (H, residual), and the
-  // candidates' columns at its nodes.
-  auto build_stacks = [](const BaseModel& b, Stack& cal_out, Stack& test_out) {
-    Index nc = 0, nt = 0;
-    for (const NodeData& n : b.nodes) (n.test ? nt : nc) += n.r.size();
-    cal_out = Stack{}, test_out = Stack{};
-    cal_out.H.resize(nc, b.parameters), cal_out.y.resize(nc);
-    test_out.H.resize(nt, b.parameters), test_out.y.resize(nt);
-    Index rc = 0, rt = 0;
-    for (std::size_t k = 0; k < b.nodes.size(); ++k) {
-      const NodeData& n = b.nodes[k];
-      Stack& st = n.test ? test_out : cal_out;
-      Index& r = n.test ? rt : rc;
-      st.H.middleRows(r, n.r.size()) = n.H;
-      st.y.segment(r, n.r.size()) = n.r;
-      st.node.push_back(k);
-      r += n.r.size();
-    }
-  };
-  Stack cal, test;
+// Candidate effects and their columns at the base solution.
+void DiagnosisRun::stack_candidates() {
   build_stacks(base, cal, test);
   if (test.node.empty())
     d.notes.push_back("no test rows: effects are accepted on significance alone (no held-out check)");
 
   // Candidate effects and their columns.
-  std::vector<const Effect*> candidates;
   for (const auto& e : effect_registry()) {
     if (!options.candidates.empty() &&
         std::find(options.candidates.begin(), options.candidates.end(), e->name()) == options.candidates.end())
@@ -394,118 +481,126 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
     cal.G[e->name()] = detail::effect_columns(robot, *e, base, false);
     test.G[e->name()] = detail::effect_columns(robot, *e, base, true);
   }
-  const Index n_cal = cal.y.size();
+  n_cal = cal.y.size();
   if (n_cal <= base.parameters)
     throw InputError(data.file, 0, 0,
                      "only " + std::to_string(cal.node.size()) + " usable cal nodes (" + std::to_string(n_cal) +
                          " equations) for " + std::to_string(base.parameters) + " base parameters");
+}
 
-  const FitResult base_fit = fit(cal, test, {});
+void DiagnosisRun::fit_base_columns() {
+  base_fit = fit(cal, test, {});
   d.rms = base_fit.rms;
-  const double sigma_mm = d.noise_um / kMicro;
-  const bool noise_known = sigma_mm > 0;
+  sigma_mm = d.noise_um / kMicro;
+  noise_known = sigma_mm > 0;
+}
 
-  auto consistent_rms = [&](double rss, Index rank, double test_ss, Index test_n) {
-    if (!noise_known || !(sigma_mm > 0)) return false;
-    const double dof = double(n_cal - rank);
-    if (chi2_upper_tail(rss / (sigma_mm * sigma_mm), dof) < options.alpha) return false;
-    if (test_n > 0) {
-      // Held-out rows also carry the spread of the estimate (leverage): allow
-      // ~(1 + p/n) on the variance plus a 3σ band of χ²/ν.
-      const double nt = double(test_n);
-      const double expected = sigma_mm * sigma_mm * (1.0 + double(rank) / double(n_cal));
-      if (test_ss / nt > expected * (1.0 + 3.0 * std::sqrt(2.0 / nt))) return false;
+bool DiagnosisRun::consistent_rms(double rss, Index rank, double test_ss, Index test_n) const {
+  if (!noise_known || !(sigma_mm > 0)) return false;
+  const double dof = double(n_cal - rank);
+  if (chi2_upper_tail(rss / (sigma_mm * sigma_mm), dof) < options.alpha) return false;
+  if (test_n > 0) {
+    // Held-out rows also carry the spread of the estimate (leverage): allow
+    // ~(1 + p/n) on the variance plus a 3σ band of χ²/ν.
+    const double nt = double(test_n);
+    const double expected = sigma_mm * sigma_mm * (1.0 + double(rank) / double(n_cal));
+    if (test_ss / nt > expected * (1.0 + 3.0 * std::sqrt(2.0 / nt))) return false;
+  }
+  return true;
+}
+
+// Step 1 always ranks the candidates (the user sees what each would add).
+// The held-out gain an effect must bring: none beyond being positive
+// where the model is already consistent with the noise; elsewhere
+// min_test_gain, but at most half of what separates the held-out
+// residual from the noise (its expected RMS σ·√(1 + p/n)). An effect almost in the span of the base leaves
+// little in the residual yet still moves the machine — the hybrid's
+// wrist scale after compliance, 98 % confounded: F = 4.4 and −0.6 %
+// held-out at step 2, compensated 3.03 µm with compliance alone and
+// 1.71 µm with both; its UPS-actuator scale on 1 000 random nodes,
+// absorbed by the base to 2.6 % above the noise, F = 54 and −2.1 % —
+// and the F test alone then carries the evidence.
+double DiagnosisRun::required_gain(const FitResult& f) const {
+  if (consistent(f)) return 0.0;
+  if (!(sigma_mm > 0) || !(f.rms.test > 0)) return options.min_test_gain;
+  const double expected = kMicro * sigma_mm * std::sqrt(1.0 + double(f.rank) / double(n_cal));
+  return std::min(options.min_test_gain, 0.5 * std::max(0.0, 1.0 - expected / f.rms.test));
+}
+
+// Each candidate not yet accepted, fitted with the accepted ones: its F test
+// against the current model, Cp, confounding and held-out gain.
+std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
+  const double cp_variance =
+      noise_known ? sigma_mm * sigma_mm : current.rss / double(std::max<Index>(1, n_cal - current.rank));
+  std::vector<EffectTest> tests;
+  for (const Effect* e : candidates) {
+    if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
+    EffectTest t;
+    t.effect = e->name();
+    t.parameters = int(cal.G.at(e->name()).cols());
+    t.step = step;
+    std::vector<std::string> with = accepted;
+    with.push_back(e->name());
+    const FitResult f = fit(cal, test, with);
+    const double df1 = double(f.rank - current.rank), df2 = double(n_cal - f.rank);
+    t.cp = f.rss / cp_variance + 2.0 * double(f.rank);
+    if (df1 > 0 && df2 > 0 && f.rss > 0) {
+      t.score = ((current.rss - f.rss) / df1) / (f.rss / df2);
+      t.p_value = f_distribution_upper_tail(t.score, df1, df2);
     }
-    return true;
-  };
-  auto consistent = [&](const FitResult& f) {
-    return consistent_rms(f.rss, f.rank, f.r_test.squaredNorm(), f.r_test.size());
-  };
+    // Share of the effect's columns inside the span of the current model.
+    {
+      const MatrixXd X = design(cal, accepted);
+      const LeastSquares ls(X);
+      const MatrixXd& G = cal.G.at(e->name());
+      double sum = 0;
+      int counted = 0;
+      for (Index j = 0; j < G.cols(); ++j) {
+        const double g2 = G.col(j).squaredNorm();
+        if (!(g2 > 0)) continue;
+        const VectorXd inside = X * ls.solve(G.col(j));
+        sum += std::min(1.0, inside.squaredNorm() / g2);
+        ++counted;
+      }
+      t.confounded = counted > 0 ? sum / counted : 1.0;
+    }
+    t.rms_after = f.rms;
+    if (current.rms.test > 0 && f.r_test.size() > 0) t.test_gain = 1.0 - f.rms.test / current.rms.test;
+    tests.push_back(t);
+  }
+  return tests;
+}
 
-  // Stepwise search.
-  std::vector<std::string> accepted;
-  FitResult current = base_fit;
+// Holm's step-down adjustment over one step's candidates.
+void adjust_by_holm(std::vector<EffectTest>& tests) {
+  // Holm's step-down adjustment over this step's candidates.
+  std::vector<std::size_t> order(tests.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
+  double running = 0;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const double adj = std::min(1.0, double(order.size() - i) * tests[order[i]].p_value);
+    running = std::max(running, adj);
+    tests[order[i]].p_adjusted = running;
+  }
+}
+
+void DiagnosisRun::stepwise_search() {
+  current = base_fit;
   d.steps.push_back({{"base"}, base_fit.rms});
-  std::map<std::string, EffectTest> latest;
-  // Effect values the current linearisation starts from (re-linearised
-  // steps); the final fit's coefficients are increments on them.
-  std::map<std::string, VectorXd> effect_start;
   for (int step = 1; step <= int(candidates.size()); ++step) {
-    // Step 1 always ranks the candidates (the user sees what each would add).
-    // The held-out gain an effect must bring: none beyond being positive
-    // where the model is already consistent with the noise; elsewhere
-    // min_test_gain, but at most half of what separates the held-out
-    // residual from the noise (its expected RMS σ·√(1 + p/n)). An effect almost in the span of the base leaves
-    // little in the residual yet still moves the machine — the hybrid's
-    // wrist scale after compliance, 98 % confounded: F = 4.4 and −0.6 %
-    // held-out at step 2, compensated 3.03 µm with compliance alone and
-    // 1.71 µm with both; its UPS-actuator scale on 1 000 random nodes,
-    // absorbed by the base to 2.6 % above the noise, F = 54 and −2.1 % —
-    // and the F test alone then carries the evidence.
-    auto required_gain = [&](const FitResult& f) {
-      if (consistent(f)) return 0.0;
-      if (!(sigma_mm > 0) || !(f.rms.test > 0)) return options.min_test_gain;
-      const double expected = kMicro * sigma_mm * std::sqrt(1.0 + double(f.rank) / double(n_cal));
-      return std::min(options.min_test_gain, 0.5 * std::max(0.0, 1.0 - expected / f.rms.test));
-    };
     progress("step " + std::to_string(step) + ": testing " + std::to_string(candidates.size() - accepted.size()) +
              " candidate effects");
-    const double cp_variance =
-        noise_known ? sigma_mm * sigma_mm : current.rss / double(std::max<Index>(1, n_cal - current.rank));
-    std::vector<EffectTest> tests;
-    for (const Effect* e : candidates) {
-      if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
-      EffectTest t;
-      t.effect = e->name();
-      t.parameters = int(cal.G.at(e->name()).cols());
-      t.step = step;
-      std::vector<std::string> with = accepted;
-      with.push_back(e->name());
-      const FitResult f = fit(cal, test, with);
-      const double df1 = double(f.rank - current.rank), df2 = double(n_cal - f.rank);
-      t.cp = f.rss / cp_variance + 2.0 * double(f.rank);
-      if (df1 > 0 && df2 > 0 && f.rss > 0) {
-        t.score = ((current.rss - f.rss) / df1) / (f.rss / df2);
-        t.p_value = f_distribution_upper_tail(t.score, df1, df2);
-      }
-      // Share of the effect's columns inside the span of the current model.
-      {
-        const MatrixXd X = design(cal, accepted);
-        const LeastSquares ls(X);
-        const MatrixXd& G = cal.G.at(e->name());
-        double sum = 0;
-        int counted = 0;
-        for (Index j = 0; j < G.cols(); ++j) {
-          const double g2 = G.col(j).squaredNorm();
-          if (!(g2 > 0)) continue;
-          const VectorXd inside = X * ls.solve(G.col(j));
-          sum += std::min(1.0, inside.squaredNorm() / g2);
-          ++counted;
-        }
-        t.confounded = counted > 0 ? sum / counted : 1.0;
-      }
-      t.rms_after = f.rms;
-      if (current.rms.test > 0 && f.r_test.size() > 0) t.test_gain = 1.0 - f.rms.test / current.rms.test;
-      tests.push_back(t);
-    }
-    // Holm's step-down adjustment over this step's candidates.
-    std::vector<std::size_t> order(tests.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return tests[a].p_value < tests[b].p_value; });
-    double running = 0;
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      const double adj = std::min(1.0, double(order.size() - i) * tests[order[i]].p_value);
-      running = std::max(running, adj);
-      tests[order[i]].p_adjusted = running;
-    }
+    std::vector<EffectTest> tests = test_candidates(step);
+    adjust_by_holm(tests);
     // Of the effects that qualify (significant, and helping the held-out
     // rows), the one of lowest Mallows' Cp: the model that fits the data best
     // for its size. Effects of the same size (the hybrid's wrist scale and
     // compliance, both 6 columns, 98 % confounded with each other) then
     // compare by their RSS; the most significant p-value, the earlier rule,
     // favoured the effect with a column fewer and named compliance for a
-    // wrist scale whose RSS was lower (noise seed 11: Cp 2.3 lower for
-    // scale; compensated 3.06 µm with compliance, 1.37 µm with scale). Ties
+    // wrist scale whose RSS was lower (noise seed 11: Cp 0.25 lower for
+    // scale; compensated 3.06 µm with compliance, 1.46 µm with scale). Ties
     // (equal Cp) go to the smaller p-value.
     auto better = [](const EffectTest& a, const EffectTest& b) {
       return a.cp < b.cp || (a.cp == b.cp && a.p_value < b.p_value);
@@ -521,46 +616,7 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
     latest[best->effect].accepted = true;
     accepted.push_back(best->effect);
     current = fit(cal, test, accepted);
-    if (options.relinearise) {
-      // The linear refit is one Gauss–Newton step from the base-only fit;
-      // an effect much confounded with the base (the hybrid's compliance:
-      // 99.9 %) moves the base far enough that the step falls short. Fit the
-      // accepted effects with the base nonlinearly (calibrate_with_effects),
-      // refit the base on the effect-corrected data and test the next
-      // candidates at that solution. Kept only if it fits the cal rows
-      // better than the linear step (an alternation that failed is ignored).
-      progress("re-linearising the base with " + best->effect);
-      EffectCalibrationOptions eo;
-      eo.estimator = "ols";
-      eo.max_passes = 4;
-      // Every parameter of an accepted effect stays free here: the step
-      // moves the base for the next tests, and the elimination's extra
-      // rounds would cost more than the 0.5 s a diagnosis has.
-      eo.alpha = 0;
-      const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
-      BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
-                                         en, "ols", true);
-      if (robot.is_stewart()) scale_orientation_rows(moved, orientation_factor);
-      bool same_nodes = moved.nodes.size() == base.nodes.size();
-      for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
-        same_nodes = moved.nodes[k].row == base.nodes[k].row && moved.nodes[k].r.size() == base.nodes[k].r.size();
-      if (same_nodes) {
-        Stack cal2, test2;
-        build_stacks(moved, cal2, test2);
-        for (const Effect* e : candidates) {
-          cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false);
-          test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true);
-        }
-        const FitResult moved_fit = fit(cal2, test2, accepted);
-        if (moved_fit.rss < current.rss) {
-          base = std::move(moved);
-          cal = std::move(cal2);
-          test = std::move(test2);
-          current = moved_fit;
-          for (const std::string& a : accepted) effect_start[a] = m.effects.values.at(a);
-        }
-      }
-    }
+    if (options.relinearise) relinearise(best->effect);
     std::vector<std::string> model = {"base"};
     model.insert(model.end(), accepted.begin(), accepted.end());
     d.steps.push_back({model, current.rms});
@@ -569,35 +625,79 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
   }
   d.accepted = accepted;
   d.final_rms = current.rms;
-  // Ranking: accepted in order, then by score; untestable last.
-  {
-    std::vector<EffectTest> ranked;
-    for (const std::string& a : accepted) ranked.push_back(latest[a]);
-    std::vector<EffectTest> rest;
-    for (const auto& [name, t] : latest)
-      if (!t.accepted) rest.push_back(t);
-    std::sort(rest.begin(), rest.end(), [](const EffectTest& a, const EffectTest& b) {
-      return a.p_value < b.p_value || (a.p_value == b.p_value && a.score > b.score);
-    });
-    ranked.insert(ranked.end(), rest.begin(), rest.end());
-    for (const EffectTest& t : d.ranking) ranked.push_back(t);  // the untestable ones
-    d.ranking = ranked;
-  }
+}
 
-  // Accepted effect values from the final fit.
-  {
-    Index c = base.parameters;
-    for (const std::string& a : accepted) {
-      const std::vector<std::string> names = find_effect(a)->parameter_names(robot);
-      const auto start_it = effect_start.find(a);
-      for (std::size_t j = 0; j < names.size(); ++j)
-        d.accepted_parameters.emplace_back(
-            a + ":" + names[j],
-            current.coef(c + Index(j)) + (start_it != effect_start.end() ? start_it->second(Index(j)) : 0.0));
-      c += Index(names.size());
+void DiagnosisRun::relinearise(const std::string& accepted_effect) {
+  // The linear refit is one Gauss–Newton step from the base-only fit;
+  // an effect much confounded with the base (the hybrid's compliance:
+  // 99.9 %) moves the base far enough that the step falls short. Fit the
+  // accepted effects with the base nonlinearly (calibrate_with_effects),
+  // refit the base on the effect-corrected data and test the next
+  // candidates at that solution. Kept only if it fits the cal rows
+  // better than the linear step (an alternation that failed is ignored).
+  progress("re-linearising the base with " + accepted_effect);
+  EffectCalibrationOptions eo;
+  eo.estimator = "ols";
+  eo.max_passes = 4;
+  // Every parameter of an accepted effect stays free here: the step
+  // moves the base for the next tests, and the elimination's extra
+  // rounds would cost more than the 0.5 s a diagnosis has.
+  eo.alpha = 0;
+  const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
+  BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
+                                     en, "ols", true);
+  if (robot.is_stewart()) scale_orientation_rows(moved, orientation_factor);
+  bool same_nodes = moved.nodes.size() == base.nodes.size();
+  for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
+    same_nodes = moved.nodes[k].row == base.nodes[k].row && moved.nodes[k].r.size() == base.nodes[k].r.size();
+  if (same_nodes) {
+    Stack cal2, test2;
+    build_stacks(moved, cal2, test2);
+    for (const Effect* e : candidates) {
+      cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false);
+      test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true);
+    }
+    const FitResult moved_fit = fit(cal2, test2, accepted);
+    if (moved_fit.rss < current.rss) {
+      base = std::move(moved);
+      cal = std::move(cal2);
+      test = std::move(test2);
+      current = moved_fit;
+      for (const std::string& a : accepted) effect_start[a] = m.effects.values.at(a);
     }
   }
+}
 
+void DiagnosisRun::rank_candidates() {
+  // Ranking: accepted in order, then by score; untestable last.
+  std::vector<EffectTest> ranked;
+  for (const std::string& a : accepted) ranked.push_back(latest[a]);
+  std::vector<EffectTest> rest;
+  for (const auto& [name, t] : latest)
+    if (!t.accepted) rest.push_back(t);
+  std::sort(rest.begin(), rest.end(), [](const EffectTest& a, const EffectTest& b) {
+    return a.p_value < b.p_value || (a.p_value == b.p_value && a.score > b.score);
+  });
+  ranked.insert(ranked.end(), rest.begin(), rest.end());
+  for (const EffectTest& t : d.ranking) ranked.push_back(t);  // the untestable ones
+  d.ranking = ranked;
+}
+
+void DiagnosisRun::read_accepted_values() {
+  // Accepted effect values from the final fit.
+  Index c = base.parameters;
+  for (const std::string& a : accepted) {
+    const std::vector<std::string> names = find_effect(a)->parameter_names(robot);
+    const auto start_it = effect_start.find(a);
+    for (std::size_t j = 0; j < names.size(); ++j)
+      d.accepted_parameters.emplace_back(
+          a + ":" + names[j],
+          current.coef(c + Index(j)) + (start_it != effect_start.end() ? start_it->second(Index(j)) : 0.0));
+    c += Index(names.size());
+  }
+}
+
+void DiagnosisRun::judge() {
   // Verdict.
   // GUIDE: "explained" = the accepted effects bring the held-out residuals to
   // the noise level; with no test rows the cal residual decides.
@@ -616,45 +716,48 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
   } else {
     d.verdict = accepted.empty() ? "consistent" : "explained";
   }
+}
 
+void DiagnosisRun::residual_per_node() {
   // Per-node residuals (before: base model; after: the final model).
   progress("locating the residual");
-  std::vector<NodeTwist> before(base.nodes.size()), after(base.nodes.size());
-  {
-    VectorXd r_after_cal = current.r_cal, r_after_test = current.r_test, r_before_cal = base_fit.r_cal,
-             r_before_test = base_fit.r_test;
-    Index rc = 0, rt = 0;
-    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
-      const NodeData& n = base.nodes[k];
-      const Index len = n.r.size();
-      Index& r = n.test ? rt : rc;
-      const VectorXd& b = n.test ? r_before_test : r_before_cal;
-      const VectorXd& a = n.test ? r_after_test : r_after_cal;
-      before[k] = node_twist(n, b.segment(r, len));
-      after[k] = node_twist(n, a.segment(r, len));
-      r += len;
-      const PoseRow& row = data.rows[n.row];
-      NodeResidual nr;
-      nr.id = row.id;
-      nr.layer = row.layer;
-      nr.test = n.test;
-      nr.commanded = row.commanded;
-      nr.q = n.effect.q;
-      nr.temperature = row.temp;
-      nr.time = row.time;
-      nr.before = before[k].twist.head<3>() * kMicro;
-      nr.after = after[k].twist.head<3>() * kMicro;
-      for (int j = 0; j < 6; ++j) {
-        nr.joint_before(j) = before[k].joint(j) * joint_display(robot, j);
-        nr.joint_after(j) = after[k].joint(j) * joint_display(robot, j);
-      }
-      d.nodes.push_back(nr);
+  before = std::vector<NodeTwist>(base.nodes.size());
+  after = std::vector<NodeTwist>(base.nodes.size());
+  VectorXd r_after_cal = current.r_cal, r_after_test = current.r_test, r_before_cal = base_fit.r_cal,
+           r_before_test = base_fit.r_test;
+  Index rc = 0, rt = 0;
+  for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+    const NodeData& n = base.nodes[k];
+    const Index len = n.r.size();
+    Index& r = n.test ? rt : rc;
+    const VectorXd& b = n.test ? r_before_test : r_before_cal;
+    const VectorXd& a = n.test ? r_after_test : r_after_cal;
+    before[k] = node_twist(n, b.segment(r, len));
+    after[k] = node_twist(n, a.segment(r, len));
+    r += len;
+    const PoseRow& row = data.rows[n.row];
+    NodeResidual nr;
+    nr.id = row.id;
+    nr.layer = row.layer;
+    nr.test = n.test;
+    nr.commanded = row.commanded;
+    nr.q = n.effect.q;
+    nr.temperature = row.temp;
+    nr.time = row.time;
+    nr.before = before[k].twist.head<3>() * kMicro;
+    nr.after = after[k].twist.head<3>() * kMicro;
+    for (int j = 0; j < 6; ++j) {
+      nr.joint_before(j) = before[k].joint(j) * joint_display(robot, j);
+      nr.joint_after(j) = after[k].joint(j) * joint_display(robot, j);
     }
+    d.nodes.push_back(nr);
   }
+}
 
-  // Groups: per layer, per joint, per region, per covariate (final residual).
-  std::vector<double> node_ss(base.nodes.size(), 0.0);
-  std::vector<Index> node_len(base.nodes.size(), 0);
+// Groups: per layer, per joint, per region, per covariate (final residual).
+void DiagnosisRun::prepare_groups() {
+  node_ss.assign(base.nodes.size(), 0.0);
+  node_len.assign(base.nodes.size(), 0);
   {
     Index rc = 0, rt = 0;
     for (std::size_t k = 0; k < base.nodes.size(); ++k) {
@@ -667,234 +770,243 @@ Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const Diagnos
       r += len;
     }
   }
-  const double sigma_used = d.noise_um / kMicro;
-  double excess_total = 0;
+  sigma_used = d.noise_um / kMicro;
+  excess_total = 0;
   for (std::size_t k = 0; k < base.nodes.size(); ++k)
     excess_total += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
-  auto group = [&](const std::string& label, const std::vector<std::size_t>& members, double* excess = nullptr) {
-    ResidualGroup g;
-    g.label = label;
-    g.nodes = members.size();
-    double ss = 0, len = 0, ex = 0;
-    for (std::size_t k : members) {
-      ss += node_ss[k];
-      len += double(node_len[k]);
-      ex += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
-    }
-    g.rms_um = len > 0 ? std::sqrt(ss / len) * kMicro : 0.0;
-    g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
-    if (excess != nullptr) *excess = excess_total > 0 ? ex / excess_total : 0.0;
-    return g;
-  };
-  {
-    std::map<long long, std::vector<std::size_t>> layers;
-    for (std::size_t k = 0; k < base.nodes.size(); ++k) layers[data.rows[base.nodes[k].row].layer.value_or(0)].push_back(k);
-    for (const auto& [layer, members] : layers) {
-      double share = 0;
-      d.by_layer.push_back(group("layer " + std::to_string(layer), members, &share));
-      if (d.verdict == "unexplained" && layers.size() > 1 && share > 1.5 / double(layers.size()))
-        d.hotspots.push_back({"layer", "layer " + std::to_string(layer), share,
-                              "RMS " + fmt(d.by_layer.back().rms_um) + " um = " + fmt(d.by_layer.back().ratio) +
-                                  " x noise"});
-    }
+}
+
+ResidualGroup DiagnosisRun::group(const std::string& label, const std::vector<std::size_t>& members,
+                                  double* excess) const {
+  ResidualGroup g;
+  g.label = label;
+  g.nodes = members.size();
+  double ss = 0, len = 0, ex = 0;
+  for (std::size_t k : members) {
+    ss += node_ss[k];
+    len += double(node_len[k]);
+    ex += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
   }
+  g.rms_um = len > 0 ? std::sqrt(ss / len) * kMicro : 0.0;
+  g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
+  if (excess != nullptr) *excess = excess_total > 0 ? ex / excess_total : 0.0;
+  return g;
+}
+
+void DiagnosisRun::by_layer() {
+  std::map<long long, std::vector<std::size_t>> layers;
+  for (std::size_t k = 0; k < base.nodes.size(); ++k) layers[data.rows[base.nodes[k].row].layer.value_or(0)].push_back(k);
+  for (const auto& [layer, members] : layers) {
+    double share = 0;
+    d.by_layer.push_back(group("layer " + std::to_string(layer), members, &share));
+    if (d.verdict == "unexplained" && layers.size() > 1 && share > 1.5 / double(layers.size()))
+      d.hotspots.push_back({"layer", "layer " + std::to_string(layer), share,
+                            "RMS " + fmt(d.by_layer.back().rms_um) + " um = " + fmt(d.by_layer.back().ratio) +
+                                " x noise"});
+  }
+}
+
+void DiagnosisRun::by_region() {
   // Regions: quadrants of the commanded x, y (and the upper/lower half in z).
-  {
-    std::map<std::string, std::vector<std::size_t>> regions;
-    double zmid = 0;
-    for (const NodeData& n : base.nodes) zmid += data.rows[n.row].commanded(2);
-    zmid /= double(std::max<std::size_t>(1, base.nodes.size()));
-    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
-      const Vec6<double>& c = data.rows[base.nodes[k].row].commanded;
-      const std::string label = std::string(c(0) >= 0 ? "x>=0" : "x<0") + "," + (c(1) >= 0 ? "y>=0" : "y<0") + "," +
-                                (c(2) >= zmid ? "upper z" : "lower z");
-      regions[label].push_back(k);
-    }
-    // The worst region by index: by_region grows (and moves) in the loop.
-    std::optional<std::size_t> worst;
-    double worst_share = 0;
-    for (const auto& [label, members] : regions) {
-      double share = 0;
-      d.by_region.push_back(group(label, members, &share));
-      if (share > worst_share) worst_share = share, worst = d.by_region.size() - 1;
-    }
-    if (d.verdict == "unexplained" && worst && worst_share > 2.0 / double(regions.size())) {
-      const ResidualGroup& w = d.by_region[*worst];
-      d.hotspots.push_back({"region", w.label, worst_share,
-                            "RMS " + fmt(w.rms_um) + " um = " + fmt(w.ratio) + " x noise there"});
-    }
+  std::map<std::string, std::vector<std::size_t>> regions;
+  double zmid = 0;
+  for (const NodeData& n : base.nodes) zmid += data.rows[n.row].commanded(2);
+  zmid /= double(std::max<std::size_t>(1, base.nodes.size()));
+  for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+    const Vec6<double>& c = data.rows[base.nodes[k].row].commanded;
+    const std::string label = std::string(c(0) >= 0 ? "x>=0" : "x<0") + "," + (c(1) >= 0 ? "y>=0" : "y<0") + "," +
+                              (c(2) >= zmid ? "upper z" : "lower z");
+    regions[label].push_back(k);
   }
+  // The worst region by index: by_region grows (and moves) in the loop.
+  std::optional<std::size_t> worst;
+  double worst_share = 0;
+  for (const auto& [label, members] : regions) {
+    double share = 0;
+    d.by_region.push_back(group(label, members, &share));
+    if (share > worst_share) worst_share = share, worst = d.by_region.size() - 1;
+  }
+  if (d.verdict == "unexplained" && worst && worst_share > 2.0 / double(regions.size())) {
+    const ResidualGroup& w = d.by_region[*worst];
+    d.hotspots.push_back({"region", w.label, worst_share,
+                          "RMS " + fmt(w.rms_um) + " um = " + fmt(w.ratio) + " x noise there"});
+  }
+}
+
+void DiagnosisRun::by_joint() {
   // Joints: the implied joint-space residual, standardised by its noise, in
   // bins of the joint's own position (a local error in part of a stroke).
-  {
-    struct JointFinding {
-      int joint = 0;
-      double chi2 = 0, dof = 0, p = 1;
-      double lo = 0, hi = 0, peak = 0;
-    };
-    std::vector<JointFinding> findings;
-    for (int j = 0; j < 6; ++j) {
-      std::vector<std::size_t> idx(base.nodes.size());
-      std::iota(idx.begin(), idx.end(), 0);
-      double ss = 0, noise_ss = 0;
-      for (std::size_t k : idx) {
-        ss += after[k].joint(j) * after[k].joint(j);
-        noise_ss += after[k].joint_noise_sd(j) * after[k].joint_noise_sd(j);
-      }
-      ResidualGroup g;
-      g.label = "joint " + std::to_string(j + 1) + " (" + joint_unit(robot, j) + ")";
-      g.nodes = idx.size();
-      const double n = double(std::max<std::size_t>(1, idx.size()));
-      g.rms_um = std::sqrt(ss / n) * joint_display(robot, j);
-      const double noise_rms = std::sqrt(noise_ss / n) * sigma_used;
-      g.ratio = noise_rms > 0 ? std::sqrt(ss / n) / noise_rms : 0.0;
-      g.label += ", " + joint_display_unit(robot, j);
-      d.by_joint.push_back(g);
-      // Bins of q_j: mean standardised residual per bin; χ² = Σ n_b·z̄_b².
-      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
-        return base.nodes[a].effect.q(j) < base.nodes[b].effect.q(j);
-      });
-      const std::size_t bins = std::max<std::size_t>(2, std::min<std::size_t>(10, idx.size() / 8));
-      JointFinding f;
-      f.joint = j;
-      double best_z = 0;
-      std::vector<double> bin_z(bins, 0.0);
-      std::vector<std::pair<double, double>> bin_range(bins);
-      for (std::size_t b = 0; b < bins; ++b) {
-        const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
-        if (to <= from || !(sigma_used > 0)) continue;
-        double zsum = 0;
-        for (std::size_t i = from; i < to; ++i) {
-          const std::size_t k = idx[i];
-          zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_used);
-        }
-        const double nb = double(to - from);
-        const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
-        f.chi2 += z * z;
-        f.dof += 1;
-        bin_z[b] = z;
-        bin_range[b] = {base.nodes[idx[from]].effect.q(j), base.nodes[idx[to - 1]].effect.q(j)};
-        if (std::abs(z) > std::abs(best_z)) best_z = z;
-      }
-      f.p = chi2_upper_tail(f.chi2, f.dof);
-      // The stretch of the stroke where the residual sits: the strongest bin
-      // and its neighbours of the same sign above 2σ.
-      std::size_t peak = 0;
-      for (std::size_t b = 0; b < bins; ++b)
-        if (std::abs(bin_z[b]) > std::abs(bin_z[peak])) peak = b;
-      std::size_t lo = peak, hi = peak;
-      while (lo > 0 && std::abs(bin_z[lo - 1]) > 2.0 && bin_z[lo - 1] * bin_z[peak] > 0) --lo;
-      while (hi + 1 < bins && std::abs(bin_z[hi + 1]) > 2.0 && bin_z[hi + 1] * bin_z[peak] > 0) ++hi;
-      f.lo = bin_range[lo].first;
-      f.hi = bin_range[hi].second;
-      f.peak = best_z;
-      findings.push_back(f);
+  struct JointFinding {
+    int joint = 0;
+    double chi2 = 0, dof = 0, p = 1;
+    double lo = 0, hi = 0, peak = 0;
+  };
+  std::vector<JointFinding> findings;
+  for (int j = 0; j < 6; ++j) {
+    std::vector<std::size_t> idx(base.nodes.size());
+    std::iota(idx.begin(), idx.end(), 0);
+    double ss = 0, noise_ss = 0;
+    for (std::size_t k : idx) {
+      ss += after[k].joint(j) * after[k].joint(j);
+      noise_ss += after[k].joint_noise_sd(j) * after[k].joint_noise_sd(j);
     }
-    std::sort(findings.begin(), findings.end(), [](const JointFinding& a, const JointFinding& b) {
-      return a.chi2 / std::max(1.0, a.dof) > b.chi2 / std::max(1.0, b.dof);
+    ResidualGroup g;
+    g.label = "joint " + std::to_string(j + 1) + " (" + joint_unit(robot, j) + ")";
+    g.nodes = idx.size();
+    const double n = double(std::max<std::size_t>(1, idx.size()));
+    g.rms_um = std::sqrt(ss / n) * joint_display(robot, j);
+    const double noise_rms = std::sqrt(noise_ss / n) * sigma_used;
+    g.ratio = noise_rms > 0 ? std::sqrt(ss / n) / noise_rms : 0.0;
+    g.label += ", " + joint_display_unit(robot, j);
+    d.by_joint.push_back(g);
+    // Bins of q_j: mean standardised residual per bin; χ² = Σ n_b·z̄_b².
+    std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+      return base.nodes[a].effect.q(j) < base.nodes[b].effect.q(j);
     });
-    if (d.verdict == "unexplained" && !findings.empty() && findings.front().p < options.alpha) {
-      const JointFinding& f = findings.front();
-      const std::string unit = joint_unit(robot, f.joint);
-      d.hotspots.insert(d.hotspots.begin(),
-                        {"joint", "joint " + std::to_string(f.joint + 1) + " for q" + std::to_string(f.joint + 1) +
-                                      " in [" + fmt(f.lo, 6) + ", " + fmt(f.hi, 6) + "] " + unit,
-                         0.0,
-                         "the implied joint-" + std::to_string(f.joint + 1) +
-                             " residual varies along its stroke (chi2 = " + fmt(f.chi2) + " on " + fmt(f.dof) +
-                             " bins, p = " + fmt(f.p) + "; strongest bin " + fmt(f.peak) + " sigma)"});
+    const std::size_t bins = std::max<std::size_t>(2, std::min<std::size_t>(10, idx.size() / 8));
+    JointFinding f;
+    f.joint = j;
+    double best_z = 0;
+    std::vector<double> bin_z(bins, 0.0);
+    std::vector<std::pair<double, double>> bin_range(bins);
+    for (std::size_t b = 0; b < bins; ++b) {
+      const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
+      if (to <= from || !(sigma_used > 0)) continue;
+      double zsum = 0;
+      for (std::size_t i = from; i < to; ++i) {
+        const std::size_t k = idx[i];
+        zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_used);
+      }
+      const double nb = double(to - from);
+      const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
+      f.chi2 += z * z;
+      f.dof += 1;
+      bin_z[b] = z;
+      bin_range[b] = {base.nodes[idx[from]].effect.q(j), base.nodes[idx[to - 1]].effect.q(j)};
+      if (std::abs(z) > std::abs(best_z)) best_z = z;
     }
+    f.p = chi2_upper_tail(f.chi2, f.dof);
+    // The stretch of the stroke where the residual sits: the strongest bin
+    // and its neighbours of the same sign above 2σ.
+    std::size_t peak = 0;
+    for (std::size_t b = 0; b < bins; ++b)
+      if (std::abs(bin_z[b]) > std::abs(bin_z[peak])) peak = b;
+    std::size_t lo = peak, hi = peak;
+    while (lo > 0 && std::abs(bin_z[lo - 1]) > 2.0 && bin_z[lo - 1] * bin_z[peak] > 0) --lo;
+    while (hi + 1 < bins && std::abs(bin_z[hi + 1]) > 2.0 && bin_z[hi + 1] * bin_z[peak] > 0) ++hi;
+    f.lo = bin_range[lo].first;
+    f.hi = bin_range[hi].second;
+    f.peak = best_z;
+    findings.push_back(f);
   }
+  std::sort(findings.begin(), findings.end(), [](const JointFinding& a, const JointFinding& b) {
+    return a.chi2 / std::max(1.0, a.dof) > b.chi2 / std::max(1.0, b.dof);
+  });
+  if (d.verdict == "unexplained" && !findings.empty() && findings.front().p < options.alpha) {
+    const JointFinding& f = findings.front();
+    const std::string unit = joint_unit(robot, f.joint);
+    d.hotspots.insert(d.hotspots.begin(),
+                      {"joint", "joint " + std::to_string(f.joint + 1) + " for q" + std::to_string(f.joint + 1) +
+                                    " in [" + fmt(f.lo, 6) + ", " + fmt(f.hi, 6) + "] " + unit,
+                       0.0,
+                       "the implied joint-" + std::to_string(f.joint + 1) +
+                           " residual varies along its stroke (chi2 = " + fmt(f.chi2) + " on " + fmt(f.dof) +
+                           " bins, p = " + fmt(f.p) + "; strongest bin " + fmt(f.peak) + " sigma)"});
+  }
+}
+
+void DiagnosisRun::by_covariate() {
   // Covariates: the part of the residual that follows each covariate linearly.
-  {
-    struct Covariate {
-      std::string name;
-      std::vector<double> value;
-    };
-    std::vector<Covariate> covs;
-    const char* pose_names[3] = {"x", "y", "z"};
-    for (int a = 0; a < 3; ++a) {
-      Covariate c{pose_names[a], {}};
-      for (const NodeData& n : base.nodes) c.value.push_back(data.rows[n.row].commanded(a));
-      covs.push_back(c);
-    }
-    for (int j = 0; j < 6; ++j) {
-      Covariate c{"q" + std::to_string(j + 1), {}};
-      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.q(j));
-      covs.push_back(c);
-      Covariate dir{"dir" + std::to_string(j + 1), {}};
-      for (const NodeData& n : base.nodes) dir.value.push_back(n.effect.inputs.direction(j));
-      covs.push_back(dir);
-    }
-    if (data.has_temp) {
-      Covariate c{"temp", {}};
-      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.temperature.value_or(0));
-      covs.push_back(c);
-    }
-    if (data.has_time) {
-      Covariate c{"time", {}};
-      for (const NodeData& n : base.nodes) c.value.push_back(n.effect.time.value_or(0));
-      covs.push_back(c);
-    }
-    double best_p = 1;
-    std::string best_name;
-    ResidualGroup best_group;
-    for (const Covariate& c : covs) {
-      const double mean = std::accumulate(c.value.begin(), c.value.end(), 0.0) / double(std::max<std::size_t>(1, c.value.size()));
-      double sxx = 0;
-      for (double v : c.value) sxx += (v - mean) * (v - mean);
-      ResidualGroup g;
-      g.label = c.name;
-      g.nodes = c.value.size();
-      if (!(sxx > 1e-12 * (1 + mean * mean) * double(c.value.size()))) {
-        g.label += " (constant)";
-        d.by_covariate.push_back(g);
-        continue;
-      }
-      // Slope of each tool-point coordinate of the residual against c.
-      Vec3<double> sxy = Vec3<double>::Zero();
-      for (std::size_t k = 0; k < base.nodes.size(); ++k) sxy += (c.value[k] - mean) * after[k].twist.head<3>();
-      const Vec3<double> slope = sxy / sxx;
-      const double explained_ss = slope.squaredNorm() * sxx;  // mm², over the nodes
-      g.rms_um = std::sqrt(explained_ss / double(c.value.size())) * kMicro;
-      g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
-      d.by_covariate.push_back(g);
-      if (sigma_used > 0) {
-        // Under noise the tool-point residual's coordinates have σ of order
-        // σ·√(3/rows) per node (LS through M); the slope χ² uses that.
-        double tp_var = 0;
-        for (std::size_t k = 0; k < base.nodes.size(); ++k) {
-          const MatrixXd MtM = base.nodes[k].M.transpose() * base.nodes[k].M;
-          tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
-        }
-        tp_var = tp_var / double(base.nodes.size()) * sigma_used * sigma_used;
-        const double chi2 = explained_ss / tp_var;
-        const double p = chi2_upper_tail(chi2, 3.0);
-        if (p < best_p) best_p = p, best_name = c.name, best_group = g;
-      }
-    }
-    if (d.verdict == "unexplained" && best_p < options.alpha / double(covs.size()))
-      d.hotspots.push_back({"covariate", best_name, 0.0,
-                            "the residual follows " + best_name + " linearly (" + fmt(best_group.rms_um) +
-                                " um RMS, p = " + fmt(best_p) + ")"});
+  struct Covariate {
+    std::string name;
+    std::vector<double> value;
+  };
+  std::vector<Covariate> covs;
+  const char* pose_names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    Covariate c{pose_names[a], {}};
+    for (const NodeData& n : base.nodes) c.value.push_back(data.rows[n.row].commanded(a));
+    covs.push_back(c);
   }
+  for (int j = 0; j < 6; ++j) {
+    Covariate c{"q" + std::to_string(j + 1), {}};
+    for (const NodeData& n : base.nodes) c.value.push_back(n.effect.q(j));
+    covs.push_back(c);
+    Covariate dir{"dir" + std::to_string(j + 1), {}};
+    for (const NodeData& n : base.nodes) dir.value.push_back(n.effect.inputs.direction(j));
+    covs.push_back(dir);
+  }
+  if (data.has_temp) {
+    Covariate c{"temp", {}};
+    for (const NodeData& n : base.nodes) c.value.push_back(n.effect.temperature.value_or(0));
+    covs.push_back(c);
+  }
+  if (data.has_time) {
+    Covariate c{"time", {}};
+    for (const NodeData& n : base.nodes) c.value.push_back(n.effect.time.value_or(0));
+    covs.push_back(c);
+  }
+  double best_p = 1;
+  std::string best_name;
+  ResidualGroup best_group;
+  for (const Covariate& c : covs) {
+    const double mean = std::accumulate(c.value.begin(), c.value.end(), 0.0) / double(std::max<std::size_t>(1, c.value.size()));
+    double sxx = 0;
+    for (double v : c.value) sxx += (v - mean) * (v - mean);
+    ResidualGroup g;
+    g.label = c.name;
+    g.nodes = c.value.size();
+    if (!(sxx > 1e-12 * (1 + mean * mean) * double(c.value.size()))) {
+      g.label += " (constant)";
+      d.by_covariate.push_back(g);
+      continue;
+    }
+    // Slope of each tool-point coordinate of the residual against c.
+    Vec3<double> sxy = Vec3<double>::Zero();
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) sxy += (c.value[k] - mean) * after[k].twist.head<3>();
+    const Vec3<double> slope = sxy / sxx;
+    const double explained_ss = slope.squaredNorm() * sxx;  // mm², over the nodes
+    g.rms_um = std::sqrt(explained_ss / double(c.value.size())) * kMicro;
+    g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
+    d.by_covariate.push_back(g);
+    if (sigma_used > 0) {
+      // Under noise the tool-point residual's coordinates have σ of order
+      // σ·√(3/rows) per node (LS through M); the slope χ² uses that.
+      double tp_var = 0;
+      for (std::size_t k = 0; k < base.nodes.size(); ++k) {
+        const MatrixXd MtM = base.nodes[k].M.transpose() * base.nodes[k].M;
+        tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
+      }
+      tp_var = tp_var / double(base.nodes.size()) * sigma_used * sigma_used;
+      const double chi2 = explained_ss / tp_var;
+      const double p = chi2_upper_tail(chi2, 3.0);
+      if (p < best_p) best_p = p, best_name = c.name, best_group = g;
+    }
+  }
+  if (d.verdict == "unexplained" && best_p < options.alpha / double(covs.size()))
+    d.hotspots.push_back({"covariate", best_name, 0.0,
+                          "the residual follows " + best_name + " linearly (" + fmt(best_group.rms_um) +
+                              " um RMS, p = " + fmt(best_p) + ")"});
+}
+
+void DiagnosisRun::outlier_problem() {
   // The final model's cal design and residual for the outlier screen
   // (columns scaled to unit norm: the hat matrix, hence the test, is the same).
-  {
-    MatrixXd X = design(cal, accepted);
-    for (Index j = 0; j < X.cols(); ++j)
-      if (X.col(j).norm() > 0) X.col(j) /= X.col(j).norm();
-    d.final_problem.H = std::move(X);
-    d.final_problem.y = current.r_cal;
-    for (std::size_t b = 0; b < cal.node.size(); ++b) {
-      const NodeData& n = base.nodes[cal.node[b]];
-      const PoseRow& row = data.rows[n.row];
-      for (Index k = 0; k < n.r.size(); ++k) d.final_problem.row_node.push_back(Index(b));
-      d.cal_nodes.push_back({row.id, row.line, 0.0, 1.0, true, false});
-    }
+  MatrixXd X = design(cal, accepted);
+  for (Index j = 0; j < X.cols(); ++j)
+    if (X.col(j).norm() > 0) X.col(j) /= X.col(j).norm();
+  d.final_problem.H = std::move(X);
+  d.final_problem.y = current.r_cal;
+  for (std::size_t b = 0; b < cal.node.size(); ++b) {
+    const NodeData& n = base.nodes[cal.node[b]];
+    const PoseRow& row = data.rows[n.row];
+    for (Index k = 0; k < n.r.size(); ++k) d.final_problem.row_node.push_back(Index(b));
+    d.cal_nodes.push_back({row.id, row.line, 0.0, 1.0, true, false});
   }
-  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return d;
+}
+
+Diagnosis diagnose_rows(const Robot& robot, const PoseTable& data, const DiagnoseOptions& options) {
+  return DiagnosisRun(robot, data, options).run();
 }
 
 }  // namespace
