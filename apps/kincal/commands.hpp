@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -28,6 +29,26 @@ std::vector<std::string> effect_list(const std::string& list);
 
 // One warning on stderr, on one line whatever strings from the input it quotes.
 void warn(const std::string& line);
+
+// The files a command reads (a robot description unless built in): an output
+// must be none of them (files.hpp).
+std::vector<std::string> robot_input(const std::string& robot);
+// A number as `std::ostream <<` writes it (messages).
+std::string number_text(double v);
+
+// `kincal identify` (identify_command.cpp): the base model by the family's
+// pipeline (6-UPS: seed 001's iterated LS; hybrid: seed 000's coarse + fine
+// stages finished by the joint fit), the outlier screen, identifiability,
+// MODEL.json and SUMMARY.json; with --effects, run_identify_with_effects.
+struct IdentifyArgs {
+  std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / the default base (hybrid)
+  bool keep_outliers = false;
+  std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
+  Eigen::Index pcr_components = 0;        // 0: by GCV
+  std::vector<long long> coarse_layers;   // hybrid: the coarse stage's layers (default: the cal rows)
+  double effect_alpha = 0.01;             // --effects: significance for holding effect parameters at 0
+};
+int run_identify(const IdentifyArgs& args);
 
 // A measurement file for identify / diagnose, with its warnings, and one
 // warning per row and joint outside the robot file's limits (the rows are

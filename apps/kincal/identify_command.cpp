@@ -1,0 +1,350 @@
+// `kincal identify` (commands.hpp): the family's identification pipeline, the
+// outlier screen, identifiability, and the narrative, MODEL.json and
+// SUMMARY.json; `--effects` goes to identify_effects_command.cpp.
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <exception>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <variant>
+#include <vector>
+
+#include "kincal/core/compensation.hpp"
+#include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/effect_calibration.hpp"
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/files.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/identifiability.hpp"
+#include "kincal/identify/input_error.hpp"
+#include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/parameters.hpp"
+#include "kincal/identify/robot.hpp"
+#include "kincal/identify/pose_errors.hpp"
+#include "kincal/identify/simulate.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+#include "kincal/identify/table_writer.hpp"
+#include "kincal/identify/version.hpp"
+#include "commands.hpp"
+
+namespace ki = kincal::identify;
+
+namespace kincal_app {
+
+namespace {
+
+
+// --estimator with --ridge-k / --pcr-components as library options.
+ki::EstimatorOptions estimator_options(const IdentifyArgs& a, const std::string& estimator) {
+  ki::EstimatorOptions o;
+  o.kind = ki::parse_estimator(estimator);
+  if (!a.ridge_k.empty() && o.kind != ki::EstimatorKind::Ridge)
+    throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " + estimator + ")");
+  if (a.pcr_components > 0 && o.kind != ki::EstimatorKind::Pcr)
+    throw ki::InputError("--pcr-components applies to --estimator pcr (the estimator is " + estimator + ")");
+  if (a.ridge_k == "hkb") {
+    o.ridge.rule = ki::RidgeRule::HoerlKennardBaldwin;
+  } else if (!a.ridge_k.empty() && a.ridge_k != "gcv") {
+    o.ridge.rule = ki::RidgeRule::Fixed;
+    o.ridge.k = std::stod(a.ridge_k);  // validated by the option's check
+  }
+  if (a.pcr_components > 0) o.pcr.components = a.pcr_components;
+  return o;
+}
+
+// "ridge, k = 4.3e-4 (GCV)", "pcr, 32 of 42 components (GCV)", "liu, d = 0.68 (Eq. (14))", "ols".
+std::string describe_estimate(const ki::Estimate& e, const ki::EstimatorOptions& o) {
+  std::ostringstream s;
+  s << ki::to_string(o.kind);
+  switch (o.kind) {
+    case ki::EstimatorKind::Ridge:
+      s << ", k = " << e.ridge_k
+        << (o.ridge.rule == ki::RidgeRule::Gcv ? " (generalized cross-validation)"
+                                               : o.ridge.rule == ki::RidgeRule::HoerlKennardBaldwin
+                                                     ? " (Hoerl-Kennard-Baldwin)"
+                                                     : " (given)");
+      break;
+    case ki::EstimatorKind::Pcr:
+      s << ", " << e.pcr_components << " of " << e.x.size() << " principal components"
+        << (o.pcr.components > 0 ? " (given)" : " (generalized cross-validation)");
+      break;
+    case ki::EstimatorKind::Liu: s << ", d = " << e.liu_d << " (Eq. (14))"; break;
+    case ki::EstimatorKind::Ols: break;
+  }
+  return s.str();
+}
+
+nlohmann::json node_tests_json(const std::vector<ki::NodeTest>& tests) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ki::NodeTest& t : tests)
+    out.push_back({{"id", t.id}, {"f", t.f}, {"p_value", t.p_value}, {"testable", t.testable}, {"outlying", t.outlying}});
+  return out;
+}
+
+nlohmann::json stats_json(const ki::PoseErrorStats& s) {
+  return {{"nodes", s.count},
+          {"max_position_um", 1e3 * s.max_position_mm},
+          {"mean_position_um", 1e3 * s.mean_position_mm},
+          {"rms_position_um", 1e3 * s.rms_position_mm},
+          {"max_orientation_urad", 1e6 * s.max_orientation_rad},
+          {"mean_orientation_urad", 1e6 * s.mean_orientation_rad}};
+}
+
+// SUMMARY.json: the identification's own fields plus the residuals before and
+// after calibration, overall and per role / layer.
+std::string summary_text(nlohmann::json j, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after) {
+  auto groups = [](const ki::PoseErrorReport& r) {
+    nlohmann::json out;
+    out["all"] = stats_json(r.all);
+    for (const auto& [name, st] : r.groups) out[name] = stats_json(st);
+    return out;
+  };
+  j["residual_before"] = groups(before);
+  j["residual"] = groups(after);
+  return j.dump(2) + "\n";
+}
+
+// identify's outputs: MODEL.json and, if asked, SUMMARY.json, replaced
+// together or not at all (files.hpp).
+std::vector<std::string> identify_inputs(const IdentifyArgs& a) {
+  std::vector<std::string> in = robot_input(a.robot);
+  in.push_back(a.data);
+  return in;
+}
+
+// seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
+// the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
+// or PCR.
+int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
+  std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
+  ki::EstimatorOptions eo = estimator_options(a, estimator);
+  ki::HybridCalibrationOptions ho;
+  // Liu by default, unless the data reject its shrinkage (then ridge, said
+  // below); an estimator asked for by name is kept.
+  if (!a.estimator.empty()) ho.liu_fallback = ki::HybridFineEstimator::None;
+  ho.estimator = eo.kind == ki::EstimatorKind::Ols     ? ki::HybridFineEstimator::Ols
+                 : eo.kind == ki::EstimatorKind::Ridge ? ki::HybridFineEstimator::Ridge
+                 : eo.kind == ki::EstimatorKind::Pcr   ? ki::HybridFineEstimator::Pcr
+                                                       : ki::HybridFineEstimator::Liu;
+  ho.ridge = eo.ridge;
+  ho.pcr = eo.pcr;
+  ho.coarse_layers = a.coarse_layers;
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (seed 000: coarse encoder offsets, then fine "
+            << estimator << " on the identifiable source errors)\n";
+  const ki::HybridCalibration c = ki::calibrate_hybrid(robot, data, ho);
+  const bool liu_rejected = c.options.estimator != ho.estimator;
+  if (liu_rejected) {
+    estimator = ki::to_string(c.options.estimator);
+    eo = estimator_options(a, estimator);
+    std::cout << "  liu rejected by the data: its shrinkage adds F = " << c.liu_check_f << " (p = " << c.liu_check_p
+              << ") to the OLS residual, so it removes the machine's errors, not noise; fine stage by " << estimator
+              << " (--estimator liu keeps liu)\n";
+  }
+  ho = c.options;  // the outlier refits keep the estimator chosen here
+  std::cout << "  cal nodes " << c.cal_nodes << "\n  coarse (Eq. (15)) on " << c.coarse_ids.size() << " nodes";
+  if (!c.options.coarse_layers.empty()) {
+    std::cout << " of layer(s)";
+    for (long long l : c.options.coarse_layers) std::cout << " " << l;
+    if (c.coarse_test_rows > 0)
+      std::cout << " (" << c.coarse_test_rows << " of them test rows: held out from the fine stage, not from the "
+                << "encoder offsets)";
+  }
+  std::cout << ": " << c.coarse_history.size() << " rounds, converged: " << (c.coarse_converged ? "yes" : "no")
+            << "\n";
+  for (std::size_t k = 0; k < c.coarse_history.size(); ++k)
+    std::cout << "    round " << k + 1 << ": gauge residual rms " << 1e3 * c.coarse_history[k].rms_residual
+              << " um, relative change " << c.coarse_history[k].relative_change << "\n";
+  std::cout << "  fine: " << c.kept.size() << " of 150 source errors identifiable (Sec. 4.1 reconstruction), rank "
+            << c.rank << ", condition number " << c.condition_number << "\n";
+  if (c.linearisations.size() > 1) {
+    // Large source errors: seed 000's one linear step did not predict the
+    // model's residual at its estimate (hybrid_calibration.hpp).
+    std::cout << "  fine: linearised " << c.linearisations.size() << " times (one step left the residual "
+              << std::sqrt(c.linearisations.front().rss / std::max(c.linearisations.front().rss_predicted, 1e-300))
+              << "x the linear prediction; large source errors)"
+              << (c.fine_linearisation_valid ? "" : ", NOT converged: the result is where the iteration stopped")
+              << "\n";
+    for (std::size_t k = 0; k < c.linearisations.size(); ++k) {
+      const ki::HybridFineLinearisation& l = c.linearisations[k];
+      const double rows = 9.0 * double(c.cal_nodes);
+      std::cout << "    linearisation " << k + 1 << ": "
+                << (l.damping > 0 ? "damped least-squares step (lambda " + number_text(l.damping) + ")"
+                                  : std::string(k == 0 ? "seed 000's step" : "the estimator's step"))
+                << ", residual rms "
+                << 1e3 * std::sqrt(l.rss / rows) << " um (predicted " << 1e3 * std::sqrt(l.rss_predicted / rows)
+                << " um)\n";
+    }
+  }
+  // What would make the others identifiable (pure-translation layers leave
+  // whole families of source errors without effect on the gauge).
+  const ki::IdentifiabilityHint hint = ki::hybrid_identifiability_hint(robot, c);
+  if (!hint.text.empty()) std::cout << "  not identifiable from these poses; to separate them: " << hint.text << "\n";
+  // Nodes inconsistent with the others (identify/outliers.hpp): the
+  // sequential search on the fine design; left out unless --keep-outliers.
+  const ki::HybridOutlierSearch search = ki::hybrid_outlier_search(robot, data, c, ho);
+  const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
+  kincal_app::print_outliers(a.data, screen, c.cal_nodes, a.keep_outliers);
+  const ki::HybridCalibration& used = screen.excluded ? search.rest : c;
+  const ki::Estimate& est = *used.estimate(used.options.estimator);
+  std::cout << "  estimator " << describe_estimate(est, eo) << "; fit residual rms "
+            << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows))) << " um per gauge coordinate\n";
+  ki::CalibrationModel model = ki::hybrid_model(robot, used, std::nullopt, a.data);
+  // The base by default (issue #14): seed 000's estimate finished by
+  // Gauss–Newton on the nonlinear model, shrunk toward the coarse machine by
+  // a ridge penalty whose k is chosen by GCV at the solution — the base of
+  // `identify --effects` with no effect. Seed 000's single Liu step
+  // compensated clean data of one design to 1.33–4.02 µm over three noise
+  // seeds, this base to 1.28–1.65 µm (docs/diagnosis.md). An estimator asked
+  // for by name is seed 000's fine stage with it, as is.
+  std::string base_line;
+  if (a.estimator.empty()) {
+    ki::EffectCalibrationReport rep;
+    model = ki::calibrate_with_effects(robot, screen.excluded ? ki::without_rows(data, screen.flagged) : data, {}, {},
+                                       &rep);
+    model.data_file = a.data;
+    base_line = rep.base;
+    std::cout << "  base: " << rep.base << "; cal residual rms " << rep.rms_cal_um_final
+              << " um per gauge coordinate (seed 000's " << estimator << " step as is: --estimator " << estimator
+              << ")\n";
+  }
+  const ki::HybridCompensation comp = ki::hybrid_compensation_from_model(model);
+  const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
+  const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
+  kincal_app::warn_unevaluated(a.data, after);
+  std::cout << "\nresiduals before calibration (pose error from the gauge, measured - nominal model):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+  kincal_app::warn_correction_need(model, data);
+  ki::OutputFiles outputs(identify_inputs(a));
+  outputs.add(a.out, ki::model_to_json(model));
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["robot"] = robot.name;
+    j["data"] = a.data;
+    j["estimator"] = base_line.empty() ? estimator : model.estimator;
+    j["estimator_settings"] = base_line.empty() ? ki::estimator_settings(est, eo) : model.settings;
+    if (!base_line.empty()) {
+      j["base"] = base_line;
+      j["fine_stage"] = {{"estimator", estimator}, {"estimator_settings", ki::estimator_settings(est, eo)}};
+    }
+    j["rank"] = used.rank;
+    j["parameters"] = 150;
+    j["identifiable"] = used.kept_names;
+    j["dropped"] = used.dropped_names;
+    j["dropped_hint"] = hint.text;
+    j["condition_number"] = used.condition_number;
+    j["liu_d"] = used.liu.liu_d;
+    j["liu_check"] = {{"f", c.liu_check_f}, {"p_value", c.liu_check_p}, {"rejected", liu_rejected}};
+    j["fine_linearisations"] = used.linearisations.size();
+    j["fine_linearisation_valid"] = used.fine_linearisation_valid;
+    j["coarse_iterations"] = used.coarse_history.size();
+    j["coarse_nodes"] = used.coarse_ids.size();
+    j["coarse_layers"] = used.options.coarse_layers;
+    j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
+    ki::add_outlier_fields(j, screen);
+    j["node_tests"] = node_tests_json(c.node_tests);
+    outputs.add(a.json, summary_text(j, before, after));
+  }
+  outputs.commit();
+  std::cout << "\nmodel written to " << a.out << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int run_identify(const IdentifyArgs& a) {
+  std::vector<std::string> outs{a.out};
+  if (!a.json.empty()) outs.push_back(a.json);
+  ki::check_outputs(outs, identify_inputs(a));
+  const ki::Robot robot = ki::load_robot(a.robot);
+  if (!a.effects.empty()) {
+    // --ridge-k with --effects: "gcv" (default) or a number (hkb needs the
+    // linear problem's full-rank OLS, which the passes do not form).
+    if (a.ridge_k == "hkb") throw ki::InputError("--ridge-k hkb with --effects: give gcv or a number");
+    if (!a.ridge_k.empty() && a.estimator != "ridge")
+      throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
+                           (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
+    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
+    (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
+    return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
+                                                 k, a.keep_outliers);
+  }
+  if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
+  const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
+  if (estimator == "liu")
+    throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
+                         "000's estimator for the hybrid's fine stage");
+  if (!a.coarse_layers.empty()) throw ki::InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
+  ki::StewartCalibrationOptions so;
+  so.estimator = estimator_options(a, estimator);
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data);
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
+  const ki::StewartCalibration c = ki::calibrate_stewart(robot, data, so);
+  std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "
+            << c.condition_number << "\n  estimator " << describe_estimate(c.fit, so.estimator)
+            << "\n  iteration   max dQ_int (mm+rad)   rms |dp| (um)   |step| (mm)\n";
+  for (const ki::StewartIteration& h : c.history) {
+    char line[128];
+    std::snprintf(line, sizeof line, "  %9d %21.3e %15.4f %13.3e\n", h.iteration, h.max_dq_int, 1e3 * h.rms_position_mm,
+                  h.step_norm);
+    std::cout << line;
+  }
+  // Nodes inconsistent with the others (identify/outliers.hpp); left out
+  // unless --keep-outliers.
+  const ki::StewartOutlierSearch search = ki::stewart_outlier_search(robot, data, c, so);
+  const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
+  kincal_app::print_outliers(a.data, screen, c.nodes, a.keep_outliers);
+  if (screen.excluded)
+    std::cout << "  without them: " << search.rest.nodes << " nodes fit to "
+              << 1e3 * search.rest.history.back().rms_position_mm << " um RMS (all nodes: "
+              << 1e3 * c.history.back().rms_position_mm << " um)\n";
+  const ki::StewartCalibration& used = screen.excluded ? search.rest : c;
+  const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
+  kincal_app::warn_correction_need(model, data);
+  ki::OutputFiles outputs(identify_inputs(a));
+  outputs.add(a.out, ki::model_to_json(model));
+  const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
+  const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
+  kincal_app::warn_unevaluated(a.data, after);
+  std::cout << "\nresiduals before calibration (measured - nominal model):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+  if (!a.json.empty()) {
+    nlohmann::json j;
+    j["robot"] = robot.name;
+    j["data"] = a.data;
+    j["estimator"] = estimator;
+    j["estimator_settings"] = ki::estimator_settings(used.fit, used.estimator);
+    j["rank"] = used.rank;
+    j["parameters"] = 42;
+    j["dropped"] = nlohmann::json::array();
+    j["condition_number"] = used.condition_number;
+    j["sigma_um"] = 1e3 * used.sigma_mm;
+    j["iterations"] = used.history.size();
+    ki::add_outlier_fields(j, screen);
+    j["node_tests"] = node_tests_json(c.node_tests);
+    outputs.add(a.json, summary_text(j, before, after));
+  }
+  outputs.commit();
+  std::cout << "\nmodel written to " << a.out << "\n";
+  return 0;
+}
+
+
+}  // namespace kincal_app
