@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base_fit.hpp"
+#include "least_squares_step.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
@@ -54,29 +55,8 @@ using detail::NodeData;
 
 // ---- linear algebra ----------------------------------------------------------
 
-// Least squares by a rank-revealing complete orthogonal decomposition of the
-// column-scaled design (columns in mm and rad, or per unit of an effect input,
-// differ by orders of magnitude; never the normal equations).
-// Relative rank threshold of the column-scaled designs.
-constexpr double kRankThreshold = 1e-10;
-
-class LeastSquares {
- public:
-  explicit LeastSquares(const MatrixXd& X) : scale_(X.cols()) {
-    for (Index j = 0; j < X.cols(); ++j) {
-      const double n = X.col(j).norm();
-      scale_(j) = n > 0 ? n : 1.0;
-    }
-    cod_.setThreshold(kRankThreshold);
-    cod_.compute(X * scale_.cwiseInverse().asDiagonal());
-  }
-  VectorXd solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
-  Index rank() const { return cod_.rank(); }
-
- private:
-  VectorXd scale_;
-  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod_;
-};
+// The nested fits' least squares: least_squares_step.hpp.
+using LeastSquares = detail::ScaledLeastSquares;
 
 double rms_of(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm() / double(v.size())) : 0.0; }
 

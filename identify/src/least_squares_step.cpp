@@ -9,16 +9,18 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) {
-  // Column-scaled, rank-revealing: a column of zeros or one in the span of
-  // the others gets the minimum-norm share (0).
-  VectorXd scale(X.cols());
-  for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
-  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
-  cod.setThreshold(1e-10);
-  cod.compute(X * scale.cwiseInverse().asDiagonal());
-  return scale.cwiseInverse().asDiagonal() * cod.solve(y);
+ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(X.cols()) {
+  for (Index j = 0; j < X.cols(); ++j) {
+    const double n = X.col(j).norm();
+    scale_(j) = n > 0 ? n : 1.0;
+  }
+  cod_.setThreshold(1e-10);
+  cod_.compute(X * scale_.cwiseInverse().asDiagonal());
 }
+
+VectorXd ScaledLeastSquares::solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
+
+VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) { return ScaledLeastSquares(X).solve(y); }
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y, double damping) {
   if (!(damping > 0)) return scaled_least_squares(X, y);

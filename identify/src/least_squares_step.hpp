@@ -4,12 +4,28 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/QR>
 
 namespace kincal::identify::detail {
 
-// The column-scaled least-squares step (rank-revealing COD; a zero or
-// collinear column gets no share): the one solve of every Gauss–Newton step
-// of the base and effect fits.
+// Least squares on the column-scaled design by a rank-revealing complete
+// orthogonal decomposition (columns in mm and rad, or per unit of an effect
+// input, differ by orders of magnitude; never the normal equations): a zero
+// column or one in the span of the others gets the minimum-norm share (0).
+// Relative rank threshold 1e-10. One factorisation, any number of solves.
+class ScaledLeastSquares {
+ public:
+  explicit ScaledLeastSquares(const Eigen::MatrixXd& X);
+  Eigen::VectorXd solve(const Eigen::VectorXd& y) const;
+  Eigen::Index rank() const { return cod_.rank(); }
+
+ private:
+  Eigen::VectorXd scale_;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;
+};
+
+// ScaledLeastSquares(X).solve(y): the one solve of every Gauss–Newton step
+// of the base and effect fits, and of the diagnosis's nested fits.
 Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);
 // The same step with Levenberg–Marquardt's damping λ on the scaled columns
 // (Marquardt's scaling: min ‖y − X·δ‖² + λ‖D·δ‖², D the column norms): a
