@@ -259,63 +259,40 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
   BaseModel base;
-  int steps = 0;
   const bool iterate = finish || estimator == "ridge";
   if (iterate) fit.start_from_the_better(data);
   // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
-  // lower the objective (Damping): 6 plain steps were enough wherever seed
-  // 000's step started near the minimum; from the coarse machine the damped
-  // steps need more.
-  const int max_steps = iterate ? 40 : 0;
-  Damping damping;
-  double accepted_objective = std::numeric_limits<double>::infinity();
+  // lower the objective (damped_gauss_newton): 6 plain steps were enough
+  // wherever seed 000's step started near the minimum; from the coarse
+  // machine the damped steps need more.
   HybridCompensation accepted = fit.state();
-  MatrixXd H;
-  VectorXd y;
-  std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
-  for (int iteration = 0; iteration < max_steps; ++iteration) {
-    base = fit.evaluate(data, false);
-    const double objective = fit.objective(base);
-    if (iteration == 0) modelled = base.nodes.size();
-    if (!(objective <= accepted_objective) || base.nodes.size() < modelled) {  // not lower: undone, damped more
-      fit.restore(accepted);  // evaluated after the loop
-      if (!damping.refused()) break;
-      fit.step(scaled_least_squares(H, y, damping.lambda));
-      continue;
-    }
-    // A damped step that gains less than a thousandth: the valley is flat
-    // along what the undamped step wanted (the hybrid's base chasing a
-    // thermal drift it lacks: 40 such steps gained 1.4 %); stop there.
-    const bool crawling = damping.lambda > 0 && accepted_objective - objective < 1e-3 * accepted_objective;
-    if (iteration > 0) damping.accepted();
-    accepted_objective = objective;
-    if (crawling) {
-      accepted = fit.state();
-      break;
-    }
-    accepted = fit.state();
-    Index rows = 0;
-    for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
-    const Index penalty_rows = penalty > 0 ? p : 0;
-    H.resize(rows + penalty_rows, p);
-    y.resize(rows + penalty_rows);
-    Index r = 0;
-    for (const NodeData& n : base.nodes) {
-      if (n.test) continue;
-      H.middleRows(r, n.r.size()) = n.H;
-      y.segment(r, n.r.size()) = n.r;
-      r += n.r.size();
-    }
-    if (penalty > 0) {
-      H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-      y.tail(p) = -std::sqrt(penalty) * fit.away();
-    }
-    const VectorXd delta = scaled_least_squares(H, y, damping.lambda);
-    if (damping.lambda == 0 && (H * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
-    fit.step(delta);
-    ++steps;
-  }
-  fit.restore(accepted);
+  const DescentCount count = damped_gauss_newton(
+      iterate ? 40 : 0,
+      [&] {
+        base = fit.evaluate(data, false);
+        return Evaluation{fit.objective(base), base.nodes.size()};
+      },
+      [&] { accepted = fit.state(); }, [&] { fit.restore(accepted); },
+      [&](MatrixXd& H, VectorXd& y) {
+        Index rows = 0;
+        for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
+        const Index penalty_rows = penalty > 0 ? p : 0;
+        H.resize(rows + penalty_rows, p);
+        y.resize(rows + penalty_rows);
+        Index r = 0;
+        for (const NodeData& n : base.nodes) {
+          if (n.test) continue;
+          H.middleRows(r, n.r.size()) = n.H;
+          y.segment(r, n.r.size()) = n.r;
+          r += n.r.size();
+        }
+        if (penalty > 0) {
+          H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
+          y.tail(p) = -std::sqrt(penalty) * fit.away();
+        }
+      },
+      [&](const VectorXd& delta) { fit.step(delta); });
+  const int steps = count.steps;
   base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
   fit.finish(base, data.file, steps);
   return base;

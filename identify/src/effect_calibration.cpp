@@ -178,17 +178,6 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   return base;
 }
 
-// The hybrid's base and effects in one Gauss–Newton (issue #14): at each
-// iterate the measurements are corrected for the effects at their current
-// values, the base is evaluated there (residual, design H, the joint maps)
-// and χ and the free effect parameters take one step together on [H G],
-// with the base's ridge rows √k·(χ − χ_coarse) when the base is "ridge"
-// (effects unpenalised). The alternation (fit the base to its minimum, then
-// one step for the effects) ran seed 000's coarse + fine pipeline in every
-// pass and crept along the nearly collinear base/effect directions (the
-// hybrid's compliance is 99.9 % confounded with the base); the joint step
-// moves along them at once. A step that raises the objective (RSS + penalty)
-// or loses a node is halved, from the last accepted iterate, up to 10 times.
 // The base's ridge k of a joint fit at its solution: the minimiser of
 // GCV(k) = n·RSS(k) / (n − df(k))² (Golub, Heath & Wahba) of the problem
 // linearised there, min ‖z − X·b‖² + k·‖b_base‖² with z = r + H·(χ − χ_coarse)
@@ -224,79 +213,74 @@ double joint_gcv_k(const MatrixXd& X, const VectorXd& z, Index p) {
   return best;
 }
 
+// The hybrid's base and effects in one Gauss–Newton (issue #14): at each
+// iterate the measurements are corrected for the effects at their current
+// values, the base is evaluated there (residual, design H, the joint maps)
+// and χ and the free effect parameters take one step together on [H G],
+// with the base's ridge rows √k·(χ − χ_coarse) when the base is "ridge"
+// (effects unpenalised). The alternation (fit the base to its minimum, then
+// one step for the effects) ran seed 000's coarse + fine pipeline in every
+// pass and crept along the nearly collinear base/effect directions (the
+// hybrid's compliance is 99.9 % confounded with the base); the joint step
+// moves along them at once. A step that raises the objective (RSS + penalty)
+// or loses a node is undone and damped (detail::damped_gauss_newton).
 detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
                             const EffectCalibrationOptions& options, detail::HybridBaseFit& fit,
                             const std::vector<HybridCompensation>& starts, EffectValues& values,
                             EffectCalibrationReport& rep) {
-  const int max_iterations = 4 * options.max_passes;
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
-  double accepted_objective = std::numeric_limits<double>::infinity();
   HybridCompensation accepted_state = fit.state();
   EffectValues accepted_values = values;
-  MatrixXd X;
-  VectorXd y;
-  detail::Damping damping;
-  std::size_t modelled = 0;
-  auto apply = [&](const VectorXd& delta) {
-    fit.step(delta.head(p));
-    Index c = p;
-    for (const Effect* e : list) {
-      VectorXd& v = values.values[e->name()];
-      const std::vector<bool>& h = held.at(e->name());
-      for (Index j = 0; j < v.size(); ++j)
-        if (!h[std::size_t(j)]) v(j) += delta(c++);
-    }
-  };
   auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
   fit.start_from_the_best(corrected(), starts);
   accepted_state = fit.state();
   detail::BaseModel base;
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
-  // not lower the objective (detail::Damping).
-  for (int it = 0; it < max_iterations; ++it) {
-    base = fit.evaluate(corrected(), true);
-    const double objective = fit.objective(base);
-    if (modelled == 0) modelled = base.nodes.size();
-    if (!(objective <= accepted_objective) || base.nodes.size() < modelled) {
-      fit.restore(accepted_state);
-      values = accepted_values;
-      if (X.size() == 0 || !damping.refused()) break;
-      apply(detail::scaled_least_squares(X, y, damping.lambda));
-      continue;
-    }
-    // A damped step that gains less than a thousandth: stop (see hybrid_base).
-    const bool crawling = damping.lambda > 0 && accepted_objective - objective < 1e-3 * accepted_objective;
-    if (it > 0) damping.accepted();
-    accepted_objective = objective;
-    accepted_state = fit.state();
-    accepted_values = values;
-    if (crawling) break;
-    MatrixXd H;
-    stack(base, false, H, y);
-    rep.rms_cal_um.push_back(rms_um(y));
-    X = joint_design(robot, list, held, base, H);
-    if (penalty > 0) {
-      const Index n = X.rows();
-      X.conservativeResize(n + p, Eigen::NoChange);
-      X.bottomRows(p).setZero();
-      X.bottomLeftCorner(p, p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-      y.conservativeResize(n + p);
-      y.tail(p) = -std::sqrt(penalty) * fit.away();
-    }
-    const VectorXd delta = detail::scaled_least_squares(X, y, damping.lambda);
-    rep.passes += 1;
-    // Converged when the step would lower the objective by less than a
-    // millionth: below the noise of any data set by far.
-    if (damping.lambda == 0 && (X * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
-    apply(delta);
-  }
+  // not lower the objective (detail::damped_gauss_newton).
+  const detail::DescentCount count = detail::damped_gauss_newton(
+      4 * options.max_passes,
+      [&] {
+        base = fit.evaluate(corrected(), true);
+        return detail::Evaluation{fit.objective(base), base.nodes.size()};
+      },
+      [&] {
+        accepted_state = fit.state();
+        accepted_values = values;
+      },
+      [&] {
+        fit.restore(accepted_state);
+        values = accepted_values;
+      },
+      [&](MatrixXd& X, VectorXd& y) {
+        MatrixXd H;
+        stack(base, false, H, y);
+        rep.rms_cal_um.push_back(rms_um(y));
+        X = joint_design(robot, list, held, base, H);
+        if (penalty > 0) {
+          const Index n = X.rows();
+          X.conservativeResize(n + p, Eigen::NoChange);
+          X.bottomRows(p).setZero();
+          X.bottomLeftCorner(p, p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
+          y.conservativeResize(n + p);
+          y.tail(p) = -std::sqrt(penalty) * fit.away();
+        }
+      },
+      [&](const VectorXd& delta) {
+        fit.step(delta.head(p));
+        Index c = p;
+        for (const Effect* e : list) {
+          VectorXd& v = values.values[e->name()];
+          const std::vector<bool>& h = held.at(e->name());
+          for (Index j = 0; j < v.size(); ++j)
+            if (!h[std::size_t(j)]) v(j) += delta(c++);
+        }
+      });
+  rep.passes += count.linearisations;
   // The base at the accepted iterate (the last evaluation may belong to a
   // step that was undone).
-  fit.restore(accepted_state);
-  values = accepted_values;
-  base = fit.evaluate(detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), true);
+  base = fit.evaluate(corrected(), true);
   fit.finish(base, data.file, rep.passes);
   return base;
 }

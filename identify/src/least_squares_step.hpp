@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/QR>
+#include <cstddef>
+#include <limits>
 
 namespace kincal::identify::detail {
 
@@ -46,5 +48,62 @@ struct Damping {
     return lambda <= kLargest;
   }
 };
+
+// The descent every hybrid fit runs (the base fit, the joint fit of base and
+// effects): Gauss–Newton, with Levenberg–Marquardt's damping after a step
+// that does not lower the objective or loses a node the start modelled.
+//   evaluate()       the model at the current iterate: {objective, nodes}
+//   save(), restore() the accepted iterate
+//   linearise(X, y)  the design and residual (penalty rows included) at the
+//                    iterate just evaluated and accepted
+//   apply(delta)     iterate += delta
+// Stops when the undamped step would lower the objective by less than a
+// millionth (below the noise of any data set by far), when a damped step
+// gains less than a thousandth (the valley is flat along what the undamped
+// step wanted: the hybrid's base chasing a thermal drift it lacks gained
+// 1.4 % in 40 such steps), when no damping up to Damping::kLargest
+// descends, or after `max_iterations` evaluations. Ends at the accepted
+// iterate (restored). Returns how many linearisations it made and how many
+// of their steps it took.
+struct DescentCount {
+  int linearisations = 0, steps = 0;
+};
+struct Evaluation {
+  double objective;
+  std::size_t nodes;
+};
+template <class Evaluate, class Save, class Restore, class Linearise, class Apply>
+DescentCount damped_gauss_newton(int max_iterations, Evaluate evaluate, Save save, Restore restore,
+                                 Linearise linearise, Apply apply) {
+  DescentCount count;
+  Damping damping;
+  double accepted_objective = std::numeric_limits<double>::infinity();
+  Eigen::MatrixXd X;
+  Eigen::VectorXd y;
+  std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
+  for (int iteration = 0; iteration < max_iterations; ++iteration) {
+    const Evaluation at = evaluate();
+    if (iteration == 0) modelled = at.nodes;
+    if (!(at.objective <= accepted_objective) || at.nodes < modelled) {  // not lower: undone, damped more
+      restore();
+      if (X.size() == 0 || !damping.refused()) break;
+      apply(scaled_least_squares(X, y, damping.lambda));
+      continue;
+    }
+    const bool crawling = damping.lambda > 0 && accepted_objective - at.objective < 1e-3 * accepted_objective;
+    if (iteration > 0) damping.accepted();
+    accepted_objective = at.objective;
+    save();
+    if (crawling) break;
+    linearise(X, y);
+    const Eigen::VectorXd delta = scaled_least_squares(X, y, damping.lambda);
+    ++count.linearisations;
+    if (damping.lambda == 0 && (X * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
+    apply(delta);
+    ++count.steps;
+  }
+  restore();
+  return count;
+}
 
 }  // namespace kincal::identify::detail
