@@ -552,3 +552,41 @@ TEST(identifyEstimators, OneEntryPointAndSettings) {
   o.kind = EstimatorKind::Ols;
   EXPECT_TRUE(estimator_settings(estimate(p, o), o).empty());
 }
+
+// GCV of the ridge that shrinks only some columns (the hybrid's joint fit:
+// base parameters shrunk, effect parameters free), in closed form, against
+// the ridge solved afresh at each k by an augmented QR [X; √k·(I 0)] with
+// the trace of its hat matrix from the explicit inverse — another route to
+// the same numbers. Designs drawn here, not from the tool: ill-conditioned
+// penalised block (condition 1e6), free columns on scales 1e-3…1e3, and a
+// penalised column inside the free columns' span; also no free column.
+TEST(identifyEstimators, PartialRidgeGcvMatchesTheAugmentedSolve) {
+  std::mt19937_64 rng(23);
+  auto reference = [](const MatrixXd& X, const VectorXd& z, Index p, double k) {
+    const Index n = X.rows(), m = X.cols();
+    MatrixXd A = MatrixXd::Zero(n + p, m);
+    A.topRows(n) = X;
+    A.bottomLeftCorner(p, p) = std::sqrt(k) * MatrixXd::Identity(p, p);
+    VectorXd w = VectorXd::Zero(n + p);
+    w.head(n) = z;
+    const VectorXd b = A.colPivHouseholderQr().solve(w);
+    const double rss = (z - X * b).squaredNorm();
+    MatrixXd K = X.transpose() * X;
+    K.topLeftCorner(p, p) += k * MatrixXd::Identity(p, p);
+    const double df = (X * K.inverse() * X.transpose()).trace();
+    return double(n) * rss / ((double(n) - df) * (double(n) - df));
+  };
+  for (int trial = 0; trial < 3; ++trial) {
+    const Index n = 120, p = 10, q = trial == 2 ? 0 : 4;
+    MatrixXd X(n, p + q);
+    X.leftCols(p) = design_with_spectrum(n, p, 50.0, trial == 0 ? 1e3 : 1e6, rng);
+    for (Index j = 0; j < q; ++j) X.col(p + j) = std::pow(10.0, 3.0 - 2.0 * double(j)) * gaussian(n, rng);
+    if (trial == 1) X.col(3) = 0.5 * X.col(p) / X.col(p).norm() + 0.01 * X.col(3);  // nearly inside E's span
+    const VectorXd z = X * gaussian(p + q, rng) + 0.05 * gaussian(n, rng);
+    const PartialRidgeGcv gcv(X, z, p);
+    for (const double k : {1e-6, 1e-3, 0.05, 1.0, 30.0, 1e3}) {
+      const double want = reference(X, z, p, k);
+      EXPECT_NEAR(gcv(k), want, 1e-7 * want) << "trial " << trial << ", k = " << k;
+    }
+  }
+}

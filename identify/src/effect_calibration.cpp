@@ -186,27 +186,16 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
 // GCV sees the data before the effects are modelled: an effect the base
 // lacks looks like signal, and it chose k ≈ 1e-7 (OLS) on every data set
 // with an effect; here the effect is modelled and k ≈ 0.04–0.06 on all of
-// them, the clean data's value. df(k) = tr(X (XᵀX + kP)⁻¹ Xᵀ) = ‖X R⁻¹‖²_F
-// with R from the QR of the augmented rows [X; √k P].
+// them, the clean data's value. GCV(k) in closed form for every k from one
+// factorisation (PartialRidgeGcv, estimators.hpp).
 double joint_gcv_k(const MatrixXd& X, const VectorXd& z, Index p) {
-  const double n = double(X.rows());
+  const PartialRidgeGcv gcv(X, z, p);
   double best = 0, best_gcv = std::numeric_limits<double>::infinity();
-  MatrixXd A = MatrixXd::Zero(X.rows() + p, X.cols());
-  A.topRows(X.rows()) = X;
-  VectorXd w = VectorXd::Zero(A.rows());
-  w.head(X.rows()) = z;
   for (int e = -60; e <= 20; ++e) {
     const double k = std::pow(10.0, e / 5.0);
-    A.bottomLeftCorner(p, p) = std::sqrt(k) * MatrixXd::Identity(p, p);
-    const Eigen::HouseholderQR<MatrixXd> qr(A);
-    const auto R = qr.matrixQR().topRows(X.cols()).triangularView<Eigen::Upper>();
-    const VectorXd b = R.solve((qr.householderQ().transpose() * w).head(X.cols()));
-    const double rss = (z - X * b).squaredNorm();
-    const double df = R.transpose().solve(X.transpose()).squaredNorm();
-    if (!(n - df > 0)) continue;
-    const double gcv = n * rss / ((n - df) * (n - df));
-    if (gcv < best_gcv) {
-      best_gcv = gcv;
+    const double g = gcv(k);
+    if (g < best_gcv) {
+      best_gcv = g;
       best = k;
     }
   }

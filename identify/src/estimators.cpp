@@ -783,6 +783,40 @@ double ridge_gcv(const LinearProblem& problem, double k, double rcond) {
   return design.ridge_gcv(problem.y, ws, k);
 }
 
+PartialRidgeGcv::PartialRidgeGcv(const MatrixXd& X, const VectorXd& z, Index penalised) : n_(double(X.rows())) {
+  MatrixXd A = X.leftCols(penalised);
+  VectorXd zt = z;
+  if (X.cols() > penalised) {
+    // The free columns' span by a rank-revealing QR (column-scaled, as every
+    // design here: effect columns are per unit of their input).
+    MatrixXd E = X.rightCols(X.cols() - penalised);
+    for (Index j = 0; j < E.cols(); ++j)
+      if (E.col(j).norm() > 0) E.col(j) /= E.col(j).norm();
+    Eigen::ColPivHouseholderQR<MatrixXd> qr(E);
+    qr.setThreshold(1e-10);
+    free_rank_ = qr.rank();
+    const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(X.rows(), free_rank_);
+    A -= Q * (Q.transpose() * A);
+    zt -= Q * (Q.transpose() * zt);
+  }
+  const Eigen::BDCSVD<MatrixXd> svd(A, Eigen::ComputeThinU);
+  const VectorXd c = svd.matrixU().transpose() * zt;
+  s2_ = svd.singularValues().array().square();
+  c2_ = c.array().square();
+  outside_ = std::max(0.0, zt.squaredNorm() - c2_.sum());
+}
+
+double PartialRidgeGcv::operator()(double k) const {
+  double rss = outside_, df = double(free_rank_);
+  for (Index j = 0; j < s2_.size(); ++j) {
+    const double shrink = s2_(j) + k > 0 ? k / (s2_(j) + k) : 1.0;
+    rss += shrink * shrink * c2_(j);
+    df += 1.0 - shrink;
+  }
+  if (!(n_ - df > 0)) return std::numeric_limits<double>::infinity();
+  return n_ * rss / ((n_ - df) * (n_ - df));
+}
+
 double ridge_parameter(const LinearProblem& problem, const RidgeOptions& options, double rcond) {
   EstimatorOptions o;
   o.kind = EstimatorKind::Ridge;

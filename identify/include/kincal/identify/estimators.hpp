@@ -180,6 +180,26 @@ double liu_d_minimise_mse(const Eigen::VectorXd& lambda, const Eigen::VectorXd& 
 // rank-deficient design (the sums run over the rank).
 double ridge_gcv(const LinearProblem& problem, double k, double rcond = kDefaultRcond);
 
+// GCV of a ridge that penalises only the first `penalised` columns of X,
+// min ‖z − X·b‖² + k·‖b_head‖², the other columns free (the hybrid's joint
+// fit: base parameters shrunk, effect parameters not). In closed form for
+// every k from one factorisation: the free columns E are projected out
+// (z̃, Ã = (I − P_E)·(z, A)), then with Ã = U·S·Vᵀ and c = Uᵀz̃
+//   RSS(k) = ‖z̃‖² − ‖c‖² + Σ_j (k/(s_j² + k))² c_j²,
+//   df(k)  = rank(E) + Σ_j s_j²/(s_j² + k),   GCV(k) = n·RSS(k) / (n − df(k))².
+// Equal to the augmented least squares [X; √k·(I 0)] solved afresh at each
+// k (tested), where that cost a QR of (n + p) × (p + q) per k.
+class PartialRidgeGcv {
+ public:
+  PartialRidgeGcv(const Eigen::MatrixXd& X, const Eigen::VectorXd& z, Eigen::Index penalised);
+  double operator()(double k) const;  // +∞ where n − df(k) ≤ 0
+
+ private:
+  double n_ = 0, outside_ = 0;  // rows; ‖z̃‖² − ‖c‖²
+  Eigen::Index free_rank_ = 0;
+  Eigen::VectorXd s2_, c2_;  // s_j², c_j²
+};
+
 // k by options.rule. Gcv: the minimum of ridge_gcv over k ≥ 0 (a log-spaced
 // grid over [λ_min·1e-6, λ_max·1e2] refined by golden section, compared with
 // k = 0; k = 0 when OLS is at least as good, e.g. on noise-free data).
