@@ -141,11 +141,6 @@ double incomplete_beta(double a, double b, double x) {
 
 }  // namespace
 
-double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols) {
-  if (rcond >= 0) return rcond;
-  return static_cast<double>(std::max(rows, cols)) * std::numeric_limits<double>::epsilon();
-}
-
 std::string column_name(const LinearProblem& problem, Eigen::Index j) {
   if (!problem.names.empty() && j >= 0 && j < static_cast<Index>(problem.names.size())) {
     return problem.names[static_cast<std::size_t>(j)];

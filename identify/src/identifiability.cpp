@@ -179,6 +179,11 @@ std::vector<Index> unidentifiable_from(const ScaledSvd& sv) {
 
 }  // namespace
 
+double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols) {
+  if (rcond >= 0) return rcond;
+  return static_cast<double>(std::max(rows, cols)) * std::numeric_limits<double>::epsilon();
+}
+
 Eigen::VectorXd column_scales(const Eigen::MatrixXd& H, ColumnScaling scaling) {
   VectorXd d = VectorXd::Ones(H.cols());
   if (scaling == ColumnScaling::UnitNorm) {

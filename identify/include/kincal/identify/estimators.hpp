@@ -20,14 +20,9 @@
 #include <string>
 #include <vector>
 
-namespace kincal::identify {
+#include "kincal/identify/rank_tolerance.hpp"
 
-// Relative rank tolerance: a singular value of the column-scaled design (unit
-// column norms, see identifiability.hpp) counts as zero when
-// s_j ≤ rcond · s_max. A negative value selects the default max(n, m) · ε
-// (the LAPACK / NumPy matrix_rank convention).
-inline constexpr double kDefaultRcond = -1.0;
-double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols);
+namespace kincal::identify {
 
 struct LinearProblem {
   Eigen::MatrixXd H;                       // n × m, rows are measurements, columns parameters

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "kincal/identify/estimators.hpp"  // kDefaultRcond, effective_rcond
+#include "kincal/identify/rank_tolerance.hpp"
 
 namespace kincal::identify {
 
