@@ -126,6 +126,22 @@ std::vector<std::string> identify_inputs(const IdentifyArgs& a) {
   return in;
 }
 
+// SUMMARY.json's tail both families share (the outlier screen, the node
+// tests, the residuals before and after) when it is asked for, then every
+// output written at once.
+int write_outputs(ki::OutputFiles& outputs, const IdentifyArgs& a, nlohmann::json& summary,
+                  const ki::OutlierScreen& screen, const std::vector<ki::NodeTest>& node_tests,
+                  const ki::PoseErrorReport& before, const ki::PoseErrorReport& after) {
+  if (!a.json.empty()) {
+    ki::add_outlier_fields(summary, screen);
+    summary["node_tests"] = node_tests_json(node_tests);
+    outputs.add(a.json, summary_text(summary, before, after));
+  }
+  outputs.commit();
+  std::cout << "\nmodel written to " << a.out << "\n";
+  return 0;
+}
+
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
 // the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
 // or PCR.
@@ -232,8 +248,9 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
+  nlohmann::json summary;
   if (!a.json.empty()) {
-    nlohmann::json j;
+    nlohmann::json& j = summary;
     j["robot"] = robot.name;
     j["data"] = a.data;
     j["estimator"] = base_line.empty() ? estimator : model.estimator;
@@ -256,13 +273,8 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
     j["coarse_nodes"] = used.coarse_ids.size();
     j["coarse_layers"] = used.options.coarse_layers;
     j["sigma_um"] = 1e3 * std::sqrt(est.sigma2_unbiased);
-    ki::add_outlier_fields(j, screen);
-    j["node_tests"] = node_tests_json(c.node_tests);
-    outputs.add(a.json, summary_text(j, before, after));
   }
-  outputs.commit();
-  std::cout << "\nmodel written to " << a.out << "\n";
-  return 0;
+  return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
 }  // namespace
@@ -325,8 +337,9 @@ int run_identify(const IdentifyArgs& a) {
   ki::print_pose_error_report(before, std::cout, false);
   std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
   ki::print_pose_error_report(after, std::cout, false);
+  nlohmann::json summary;
   if (!a.json.empty()) {
-    nlohmann::json j;
+    nlohmann::json& j = summary;
     j["robot"] = robot.name;
     j["data"] = a.data;
     j["estimator"] = estimator;
@@ -337,13 +350,8 @@ int run_identify(const IdentifyArgs& a) {
     j["condition_number"] = used.condition_number;
     j["sigma_um"] = 1e3 * used.sigma_mm;
     j["iterations"] = used.history.size();
-    ki::add_outlier_fields(j, screen);
-    j["node_tests"] = node_tests_json(c.node_tests);
-    outputs.add(a.json, summary_text(j, before, after));
   }
-  outputs.commit();
-  std::cout << "\nmodel written to " << a.out << "\n";
-  return 0;
+  return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
 
