@@ -361,7 +361,7 @@ class DiagnosisRun {
   std::vector<NodeTwist> before, after;
   std::vector<double> node_ss;
   std::vector<Index> node_len;
-  double sigma_used = 0, excess_total = 0;
+  double excess_total = 0;
 };
 
 void DiagnosisRun::check_inputs() {
@@ -750,10 +750,9 @@ void DiagnosisRun::prepare_groups() {
       r += len;
     }
   }
-  sigma_used = d.noise_um / kMicro;
   excess_total = 0;
   for (std::size_t k = 0; k < base.nodes.size(); ++k)
-    excess_total += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
+    excess_total += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_mm * sigma_mm);
 }
 
 ResidualGroup DiagnosisRun::group(const std::string& label, const std::vector<std::size_t>& members,
@@ -765,7 +764,7 @@ ResidualGroup DiagnosisRun::group(const std::string& label, const std::vector<st
   for (std::size_t k : members) {
     ss += node_ss[k];
     len += double(node_len[k]);
-    ex += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_used * sigma_used);
+    ex += std::max(0.0, node_ss[k] - double(node_len[k]) * sigma_mm * sigma_mm);
   }
   g.rms_um = len > 0 ? std::sqrt(ss / len) * kMicro : 0.0;
   g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
@@ -835,7 +834,7 @@ void DiagnosisRun::by_joint() {
     g.nodes = idx.size();
     const double n = double(std::max<std::size_t>(1, idx.size()));
     g.rms_um = std::sqrt(ss / n) * joint_display(robot, j);
-    const double noise_rms = std::sqrt(noise_ss / n) * sigma_used;
+    const double noise_rms = std::sqrt(noise_ss / n) * sigma_mm;
     g.ratio = noise_rms > 0 ? std::sqrt(ss / n) / noise_rms : 0.0;
     g.label += ", " + joint_display_unit(robot, j);
     d.by_joint.push_back(g);
@@ -851,11 +850,11 @@ void DiagnosisRun::by_joint() {
     std::vector<std::pair<double, double>> bin_range(bins);
     for (std::size_t b = 0; b < bins; ++b) {
       const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
-      if (to <= from || !(sigma_used > 0)) continue;
+      if (to <= from || !(sigma_mm > 0)) continue;
       double zsum = 0;
       for (std::size_t i = from; i < to; ++i) {
         const std::size_t k = idx[i];
-        zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_used);
+        zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_mm);
       }
       const double nb = double(to - from);
       const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
@@ -949,7 +948,7 @@ void DiagnosisRun::by_covariate() {
     g.rms_um = std::sqrt(explained_ss / double(c.value.size())) * kMicro;
     g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
     d.by_covariate.push_back(g);
-    if (sigma_used > 0) {
+    if (sigma_mm > 0) {
       // Under noise the tool-point residual's coordinates have σ of order
       // σ·√(3/rows) per node (LS through M); the slope χ² uses that.
       double tp_var = 0;
@@ -957,7 +956,7 @@ void DiagnosisRun::by_covariate() {
         const MatrixXd MtM = base.nodes[k].M.transpose() * base.nodes[k].M;
         tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
       }
-      tp_var = tp_var / double(base.nodes.size()) * sigma_used * sigma_used;
+      tp_var = tp_var / double(base.nodes.size()) * sigma_mm * sigma_mm;
       const double chi2 = explained_ss / tp_var;
       const double p = chi2_upper_tail(chi2, 3.0);
       if (p < best_p) best_p = p, best_name = c.name, best_group = g;

@@ -220,11 +220,10 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
                             EffectCalibrationReport& rep) {
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
-  HybridCompensation accepted_state = fit.state();
-  EffectValues accepted_values = values;
   auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
   fit.start_from_the_best(corrected(), starts);
-  accepted_state = fit.state();
+  HybridCompensation accepted_state = fit.state();
+  EffectValues accepted_values = values;
   detail::BaseModel base;
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
   // not lower the objective (detail::damped_gauss_newton).
