@@ -33,6 +33,10 @@ void warn(const std::string& line);
 // The files a command reads (a robot description unless built in): an output
 // must be none of them (files.hpp).
 std::vector<std::string> robot_input(const std::string& robot);
+// "a,b,c": finite decimal numbers (InputError naming `option` otherwise).
+std::vector<double> number_list(const std::string& text, const std::string& option);
+// "x,y,z[;x,y,z[;x,y,z]]": one to three points, mm.
+std::vector<Eigen::Vector3d> target_list(const std::string& text, const std::string& option);
 // A number as `std::ostream <<` writes it (messages).
 std::string number_text(double v);
 
@@ -43,6 +47,7 @@ std::string number_text(double v);
 struct IdentifyArgs {
   std::string robot, data, out, estimator, effects, json;  // estimator "": ols (6-UPS) / the default base (hybrid)
   bool keep_outliers = false;
+  bool instrument_frame = false;          // 6-UPS targets: measured in the instrument's frame
   std::string ridge_k;                    // "" or "gcv" (default), "hkb", or a number >= 0
   Eigen::Index pcr_components = 0;        // 0: by GCV
   std::vector<long long> coarse_layers;   // hybrid: the coarse stage's layers (default: the cal rows)

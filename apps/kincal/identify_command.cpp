@@ -37,6 +37,7 @@
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
+#include "kincal/identify/stewart_target_calibration.hpp"
 #include "kincal/identify/table_writer.hpp"
 #include "kincal/identify/version.hpp"
 #include "commands.hpp"
@@ -95,7 +96,13 @@ nlohmann::json node_tests_json(const std::vector<ki::NodeTest>& tests) {
   return out;
 }
 
-nlohmann::json stats_json(const ki::PoseErrorStats& s) {
+// Target-point residuals (PoseErrorReport::target_points) have no orientation.
+nlohmann::json stats_json(const ki::PoseErrorStats& s, bool target_points) {
+  if (target_points)
+    return {{"targets", s.count},
+            {"max_position_um", 1e3 * s.max_position_mm},
+            {"mean_position_um", 1e3 * s.mean_position_mm},
+            {"rms_position_um", 1e3 * s.rms_position_mm}};
   return {{"nodes", s.count},
           {"max_position_um", 1e3 * s.max_position_mm},
           {"mean_position_um", 1e3 * s.mean_position_mm},
@@ -109,8 +116,8 @@ nlohmann::json stats_json(const ki::PoseErrorStats& s) {
 std::string summary_text(nlohmann::json j, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after) {
   auto groups = [](const ki::PoseErrorReport& r) {
     nlohmann::json out;
-    out["all"] = stats_json(r.all);
-    for (const auto& [name, st] : r.groups) out[name] = stats_json(st);
+    out["all"] = stats_json(r.all, r.target_points);
+    for (const auto& [name, st] : r.groups) out[name] = stats_json(st, r.target_points);
     return out;
   };
   j["residual_before"] = groups(before);
@@ -277,6 +284,92 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
+// Laser-tracker targets on a 6-UPS (stewart_target_calibration.hpp): seed
+// 001's 42 errors with the targets' positions and, in the instrument's
+// frame, its registration; the frame convention closes what target
+// positions cannot fix.
+int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
+  if (!a.estimator.empty() && a.estimator != "ols")
+    throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
+  ki::StewartTargetOptions options;
+  options.instrument_frame = a.instrument_frame;
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001 from "
+            << data.target_count << " target(s) measured in the "
+            << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
+  const ki::StewartTargetCalibration c = ki::calibrate_stewart_targets(robot, data, options);
+  std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (42 joint errors, "
+            << 3 * c.targets.size() << " target coordinates" << (a.instrument_frame ? ", 6 registration" : "")
+            << ", less the frame convention's " << (a.instrument_frame ? 12 : 6) << "), rank " << c.rank
+            << ", condition number (column-scaled) " << c.condition_number << "\n";
+  std::cout << "  iteration   rms target residual (um)\n";
+  for (const ki::StewartIteration& h : c.history) {
+    char line[96];
+    std::snprintf(line, sizeof line, "  %9d %26.4f\n", h.iteration, 1e3 * h.rms_position_mm);
+    std::cout << line;
+  }
+  std::cout << "  worst-determined combinations (rotations at 1 m):\n";
+  for (const ki::WeakCombination& w : c.weakest) {
+    std::cout << "    sd " << 1e3 * w.standard_deviation_mm << " um:";
+    for (std::size_t i = 0; i < w.terms.size() && i < 6; ++i)
+      std::cout << (i ? " + " : " ") << w.terms[i].second << "*" << w.terms[i].first;
+    std::cout << "\n";
+  }
+  const ki::StewartTargetOutlierSearch search = ki::stewart_target_outlier_search(robot, data, c, options);
+  const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
+  kincal_app::print_outliers(a.data, screen, c.nodes, a.keep_outliers);
+  const ki::StewartTargetCalibration& used = screen.excluded ? search.rest : c;
+  const ki::CalibrationModel model = ki::stewart_target_model(robot, used, a.data);
+  if (a.instrument_frame) {
+    const kincal::Vec6<double> reg = used.registration.to_xyz_rpy();
+    std::cout << "  registration (base frame in the instrument frame): x " << reg(0) << ", y " << reg(1) << ", z "
+              << reg(2) << " mm, rx " << reg(3) << ", ry " << reg(4) << ", rz " << reg(5) << " rad\n";
+  }
+  for (std::size_t k = 0; k < used.targets.size(); ++k)
+    std::cout << "  target t" << k + 1 << " on the platform: " << used.targets[k].transpose() << " mm (sd "
+              << 1e3 * used.target_standard_error[k].transpose() << " um)\n";
+  kincal_app::warn_correction_need(model, data);
+  ki::OutputFiles outputs(identify_inputs(a));
+  outputs.add(a.out, ki::model_to_json(model));
+  const kincal::Pose<double> nominal_registration =
+      a.instrument_frame ? ki::nominal_registration(robot, data) : kincal::Pose<double>{};
+  const ki::PoseErrorReport before = ki::stewart_target_residuals(robot, robot, nominal_registration, robot.targets, data);
+  const ki::PoseErrorReport after =
+      ki::stewart_target_residuals(robot, ki::calibrated_robot(model), used.registration, used.targets, data);
+  kincal_app::warn_unevaluated(a.data, after);
+  std::cout << "\nresiduals at the targets before calibration (measured - nominal model"
+            << (a.instrument_frame ? " laid onto them by a rigid fit" : "") << "):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals at the targets after calibration (measured - calibrated model; test rows were not used "
+               "for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+  nlohmann::json summary;
+  if (!a.json.empty()) {
+    nlohmann::json& j = summary;
+    j["robot"] = robot.name;
+    j["data"] = a.data;
+    j["estimator"] = "ols";
+    j["measurement"] = {{"targets", data.target_count}, {"instrument_frame", a.instrument_frame}};
+    j["rank"] = used.rank;
+    j["parameters"] = used.free_parameters;
+    j["dropped"] = nlohmann::json::array();
+    j["condition_number"] = used.condition_number;
+    j["sigma_um"] = 1e3 * used.sigma_mm;
+    j["iterations"] = used.history.size();
+    nlohmann::json weak = nlohmann::json::array();
+    for (const ki::WeakCombination& w : used.weakest) {
+      nlohmann::json terms = nlohmann::json::object();
+      for (const auto& [name, coefficient] : w.terms) terms[name] = coefficient;
+      weak.push_back({{"sd_um", 1e3 * w.standard_deviation_mm}, {"terms", terms}});
+    }
+    j["weakest_combinations"] = weak;
+    nlohmann::json inst = nlohmann::json::object();
+    for (const ki::ModelParameter& p : model.instrument)
+      inst[p.name] = {{"value", p.value}, {"standard_error", p.standard_error}};
+    j["instrument"] = inst;
+  }
+  return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
+}
+
 }  // namespace
 
 int run_identify(const IdentifyArgs& a) {
@@ -296,15 +389,24 @@ int run_identify(const IdentifyArgs& a) {
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
                                                  k, a.keep_outliers);
   }
-  if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
+  if (robot.is_hybrid()) {
+    if (a.instrument_frame)
+      throw ki::InputError("--instrument-frame: the hybrid's gauge is measured in the workpiece frame; other targets "
+                           "are implemented for the 6-UPS so far");
+    return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
+  }
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
   if (estimator == "liu")
     throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
                          "000's estimator for the hybrid's fine stage");
   if (!a.coarse_layers.empty()) throw ki::InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data);
+  // Targets are used when they are all the table has, or when asked for.
+  if (data.has_targets && (!data.has_measured || a.instrument_frame)) return run_identify_targets(a, robot, data);
+  if (a.instrument_frame)
+    throw ki::InputError(a.data, 1, 0, "--instrument-frame needs target columns t1x.. (laser-tracker targets)");
   ki::StewartCalibrationOptions so;
   so.estimator = estimator_options(a, estimator);
-  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data);
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
   const ki::StewartCalibration c = ki::calibrate_stewart(robot, data, so);
   std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "

@@ -102,6 +102,30 @@ CLI::Validator kincal_app::whole_number(long long lo) {
       "INT >= " + std::to_string(lo));
 }
 
+std::vector<double> kincal_app::number_list(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  for (std::string field; std::getline(in, field, ',');) {
+    double x = 0;
+    if (!strict_decimal(field, x))
+      throw ki::InputError(option + ": '" + field + "' is not a finite decimal number (in '" + text + "')");
+    out.push_back(x);
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3d> kincal_app::target_list(const std::string& text, const std::string& option) {
+  std::vector<Eigen::Vector3d> out;
+  std::stringstream in(text);
+  for (std::string point; std::getline(in, point, ';');) {
+    const std::vector<double> v = number_list(point, option);
+    if (v.size() != 3) throw ki::InputError(option + ": a target is x,y,z in mm, not '" + point + "'");
+    out.emplace_back(v[0], v[1], v[2]);
+  }
+  if (out.empty() || out.size() > 3) throw ki::InputError(option + ": give one to three targets, 'x,y,z;x,y,z'");
+  return out;
+}
+
 std::vector<std::string> kincal_app::effect_list(const std::string& list) {
   std::vector<std::string> names;
   std::stringstream in(list);
@@ -163,7 +187,7 @@ using kincal_app::robot_input;
 using kincal_app::warn;
 
 struct SimulateArgs {
-  std::string robot, poses, out, errors;
+  std::string robot, poses, out, errors, targets, instrument_frame;
   std::vector<std::string> effects;
   double noise_mm = 0, noise_rad = 0;
   std::uint64_t seed = 1;
@@ -191,6 +215,18 @@ int run_simulate(const SimulateArgs& a) {
   const ki::PoseTable poses = ki::read_pose_table(a.poses, popt);
 
   ki::SimulateOptions sopt;
+  if (a.targets == "robot") {
+    if (nominal.targets.empty())
+      throw ki::InputError("--targets robot: the robot description has no `targets` (docs/formats.md)");
+    sopt.targets = nominal.targets;
+  } else if (!a.targets.empty()) {
+    sopt.targets = kincal_app::target_list(a.targets, "--targets");
+  }
+  if (!a.instrument_frame.empty()) {
+    const std::vector<double> v = kincal_app::number_list(a.instrument_frame, "--instrument-frame");
+    if (v.size() != 6) throw ki::InputError("--instrument-frame: give x,y,z,rx,ry,rz (mm, rad)");
+    sopt.instrument_frame = kincal::Pose<double>::from_xyz_rpy(Eigen::Map<const kincal::Vec6<double>>(v.data()));
+  }
   sopt.noise_mm = a.noise_mm;
   sopt.noise_rad = a.noise_rad;
   sopt.seed = a.seed;
@@ -347,6 +383,12 @@ int run(int argc, char** argv) {
   simulate->add_option("--effect", sim.effects,
                        "NAME:PARAM=VALUE, a physical effect of the actual machine (repeatable; e.g. scale:s1=1e-4, "
                        "thermal:c=1.2e-5; 'kincal effects' lists them)");
+  simulate->add_option("--targets", sim.targets,
+                       "6-UPS: measure laser-tracker targets, not poses: 'robot' (the description's `targets`) or "
+                       "the true positions on the platform 'x,y,z[;x,y,z[;x,y,z]]', mm (columns t1x..)");
+  simulate->add_option("--instrument-frame", sim.instrument_frame,
+                       "with --targets: the robot base frame's pose in the instrument's frame, 'x,y,z,rx,ry,rz' (mm, "
+                       "rad); the targets are written in the instrument frame");
   simulate->add_option("--noise-mm", sim.noise_mm, "sigma of Gaussian noise on positions, mm (default 0)")
       ->check(kincal_app::decimal(0, HUGE_VAL));
   simulate->add_option("--noise-rad", sim.noise_rad, "sigma of Gaussian noise on angles, rad (default 0)")
@@ -409,6 +451,9 @@ int run(int argc, char** argv) {
                        "joint fit, Bonferroni) is held at 0 and the fit repeated; 0 keeps every parameter (default 0.01)")
       ->check(kincal_app::decimal(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
+  identify->add_flag("--instrument-frame", ident.instrument_frame,
+                     "6-UPS with target columns t1x..: the targets are measured in the instrument's own frame; its "
+                     "registration is identified with the model (docs/identify.md)");
   identify->add_flag("--keep-outliers", ident.keep_outliers,
                      "fit every node, also those found inconsistent with the others (default: they are listed and "
                      "left out, unless the misfit is systematic)");

@@ -249,7 +249,9 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
 
   Group id({"id"}), pose({"x", "y", "z", "rx", "ry", "rz"});
   Group measured({"mx", "my", "mz", "mrx", "mry", "mrz"});
-  Group targets({"t1x", "t1y", "t1z", "t2x", "t2y", "t2z", "t3x", "t3y", "t3z"});
+  // One to three laser-tracker targets (t1 first): the hybrid's gauge uses all
+  // three; a 6-UPS any leading ones (stewart_target_calibration.hpp).
+  Group targets[3] = {Group({"t1x", "t1y", "t1z"}), Group({"t2x", "t2y", "t2z"}), Group({"t3x", "t3y", "t3z"})};
   Group q(numbered("q", n)), dir(numbered("dir", n));
   Group layer({"layer"}), role({"role"}), temp({"temp"}), time({"time"}), status({"status"});
   {
@@ -260,7 +262,16 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
   id.resolve(doc, "id", true);
   pose.resolve(doc, "commanded pose", true);
   measured.resolve(doc, "measured pose", false);
-  targets.resolve(doc, "gauge target", false);
+  for (int k = 0; k < 3; ++k) {
+    targets[k].resolve(doc, "target t" + std::to_string(k + 1), false);
+    if (targets[k].present) {
+      if (k > table.target_count)
+        throw InputError(file, doc.header.line, 0,
+                         "target columns t" + std::to_string(k + 1) + "x.. without t" + std::to_string(k) +
+                             "x..: number the targets from 1");
+      table.target_count = k + 1;
+    }
+  }
   q.resolve(doc, "joint command", false);
   dir.resolve(doc, "approach direction", false);
   layer.resolve(doc, "layer", false);
@@ -269,7 +280,7 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
   time.resolve(doc, "time", false);
   status.resolve(doc, "status", false);
   table.has_measured = measured.present;
-  table.has_targets = targets.present;
+  table.has_targets = table.target_count > 0;
   table.has_q = q.present;
   table.has_dir = dir.present;
   table.has_layer = layer.present;
@@ -279,7 +290,8 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
   table.has_status = status.present;
 
   std::vector<bool> known(doc.header.fields.size(), false);
-  for (const Group* g : {&id, &pose, &measured, &targets, &q, &dir, &layer, &role, &temp, &time, &status})
+  for (const Group* g : {&id, &pose, &measured, &targets[0], &targets[1], &targets[2], &q, &dir, &layer, &role, &temp,
+                         &time, &status})
     for (int i : g->index)
       if (i >= 0) known[static_cast<std::size_t>(i)] = true;
   for (std::size_t i = 0; i < known.size(); ++i)
@@ -318,9 +330,13 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
       require_turn(m, measured, r, file);
       row.measured = Eigen::Map<const Vec6<double>>(m.data());
     }
-    if (targets.present && !(failed && targets.empty_in(r))) {
-      const std::vector<double> t = targets.numbers(r, file);
-      row.targets = Eigen::Map<const Eigen::Matrix<double, 3, 3>>(t.data());
+    if (table.target_count > 0 && !(failed && targets[0].empty_in(r))) {
+      Eigen::Matrix<double, 3, 3> t = Eigen::Matrix<double, 3, 3>::Zero();
+      for (int k = 0; k < table.target_count; ++k) {
+        const std::vector<double> v = targets[k].numbers(r, file);
+        t.col(k) = Eigen::Map<const Vec3<double>>(v.data());
+      }
+      row.targets = t;
     }
     if (q.present) {
       const std::vector<double> v = q.numbers(r, file);
@@ -382,8 +398,8 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
   for (const char* c : {"x", "y", "z", "rx", "ry", "rz"}) header.push_back(c);
   if (t.has_measured)
     for (const char* c : {"mx", "my", "mz", "mrx", "mry", "mrz"}) header.push_back(c);
-  if (t.has_targets)
-    for (const char* c : {"t1x", "t1y", "t1z", "t2x", "t2y", "t2z", "t3x", "t3y", "t3z"}) header.push_back(c);
+  for (int k = 1; k <= t.target_count; ++k)
+    for (const char* c : {"x", "y", "z"}) header.push_back("t" + std::to_string(k) + c);
   if (t.has_q)
     for (const auto& c : numbered("q", n)) header.push_back(c);
   if (t.has_temp) header.push_back("temp");
@@ -401,8 +417,7 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
     for (int k = 0; k < 6; ++k) f.push_back(format_number(r.commanded(k)));
     if (t.has_measured)
       for (int k = 0; k < 6; ++k) f.push_back(r.measured ? format_number((*r.measured)(k)) : "");
-    if (t.has_targets)
-      for (int k = 0; k < 9; ++k) f.push_back(r.targets ? format_number(r.targets->data()[k]) : "");
+    for (int k = 0; k < 3 * t.target_count; ++k) f.push_back(r.targets ? format_number(r.targets->data()[k]) : "");
     if (t.has_q)
       for (int k = 0; k < n; ++k) f.push_back(r.q ? format_number((*r.q)(k)) : "");
     if (t.has_temp) f.push_back(r.temp ? format_number(*r.temp) : "");

@@ -370,7 +370,7 @@ void DiagnosisRun::check_inputs() {
   d.family = robot.family();
   if (robot.is_stewart() && !data.has_measured)
     throw InputError(data.file, 1, 0, "needs the measured pose columns mx,my,mz,mrx,mry,mrz to diagnose a 6-UPS");
-  if (robot.is_hybrid() && !data.has_targets)
+  if (robot.is_hybrid() && data.target_count != 3)
     throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
   if (data.has_layer) {

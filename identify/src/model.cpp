@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
+#include <string_view>
 #include <nlohmann/json.hpp>
 
 #include "json_locator.hpp"
@@ -53,6 +55,14 @@ std::string model_to_json(const CalibrationModel& model) {
     effects[name] = v;
   }
   if (!effects.empty()) j["effects"] = effects;
+  // The laser tracker (stewart_target_calibration.hpp): registration and targets.
+  if (!model.instrument.empty()) {
+    json inst = json::array();
+    for (const ModelParameter& p : model.instrument)
+      inst.push_back({{"name", p.name}, {"value", p.value}, {"standard_error", p.standard_error},
+                      {"identified", p.identifiable}});
+    j["instrument"] = inst;
+  }
   return j.dump(2) + "\n";
 }
 
@@ -198,7 +208,30 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
       }
     }
   }
+  if (const auto inst = j.find("instrument"); inst != j.end()) {
+    if (!inst->is_array()) r.fail("/instrument", "\"instrument\" must be an array of {name, value, standard_error}");
+    for (std::size_t k = 0; k < inst->size(); ++k) {
+      const json& p = (*inst)[k];
+      const std::string at = "/instrument/" + std::to_string(k);
+      ModelParameter mp;
+      mp.name = r.string(r.require(p, at, "name"), at + "/name");
+      if (!is_instrument_parameter(mp.name))
+        r.fail(at + "/name", "unknown instrument parameter \"" + mp.name + "\" (reg_x .. reg_rz, t1x .. t3z)");
+      mp.value = r.finite_number(r.require(p, at, "value"), at + "/value", "value of " + mp.name);
+      if (const auto se = p.find("standard_error"); se != p.end())
+        mp.standard_error = r.finite_number(*se, at + "/standard_error", "standard_error of " + mp.name);
+      if (const auto id = p.find("identified"); id != p.end() && id->is_boolean()) mp.identifiable = id->get<bool>();
+      m.instrument.push_back(mp);
+    }
+  }
   return m;
+}
+
+bool is_instrument_parameter(const std::string& name) {
+  for (const char* c : {"reg_x", "reg_y", "reg_z", "reg_rx", "reg_ry", "reg_rz"})
+    if (name == c) return true;
+  return name.size() == 3 && name[0] == 't' && name[1] >= '1' && name[1] <= '3' &&
+         std::string_view("xyz").find(name[2]) != std::string_view::npos;
 }
 
 CalibrationModel read_model_file(const std::string& path) { return parse_model(read_text_file(path), path); }

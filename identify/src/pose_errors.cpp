@@ -117,13 +117,22 @@ void print_pose_error_report(const PoseErrorReport& report, std::ostream& out, b
     }
     out << "\n";
   }
-  std::snprintf(line, sizeof line, "%-18s %6s %12s %12s %12s %14s %14s\n", "group", "nodes", "max |dp| um",
-                "mean |dp| um", "rms |dp| um", "max |dth| urad", "mean |dth| urad");
+  if (report.target_points) {
+    std::snprintf(line, sizeof line, "%-18s %7s %12s %12s %12s\n", "group", "targets", "max |dp| um", "mean |dp| um",
+                  "rms |dp| um");
+  } else {
+    std::snprintf(line, sizeof line, "%-18s %6s %12s %12s %12s %14s %14s\n", "group", "nodes", "max |dp| um",
+                  "mean |dp| um", "rms |dp| um", "max |dth| urad", "mean |dth| urad");
+  }
   out << line;
   auto row = [&](const std::string& name, const PoseErrorStats& s) {
-    std::snprintf(line, sizeof line, "%-18s %6zu %12.3f %12.3f %12.3f %14.3f %14.3f\n", name.c_str(), s.count,
-                  1e3 * s.max_position_mm, 1e3 * s.mean_position_mm, 1e3 * s.rms_position_mm,
-                  1e6 * s.max_orientation_rad, 1e6 * s.mean_orientation_rad);
+    if (report.target_points)
+      std::snprintf(line, sizeof line, "%-18s %7zu %12.3f %12.3f %12.3f\n", name.c_str(), s.count,
+                    1e3 * s.max_position_mm, 1e3 * s.mean_position_mm, 1e3 * s.rms_position_mm);
+    else
+      std::snprintf(line, sizeof line, "%-18s %6zu %12.3f %12.3f %12.3f %14.3f %14.3f\n", name.c_str(), s.count,
+                    1e3 * s.max_position_mm, 1e3 * s.mean_position_mm, 1e3 * s.rms_position_mm,
+                    1e6 * s.max_orientation_rad, 1e6 * s.mean_orientation_rad);
     out << line;
   };
   row("all", report.all);

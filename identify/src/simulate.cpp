@@ -96,9 +96,17 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   std::normal_distribution<double> unit(0.0, 1.0);
   auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
 
+  const bool tracker = !options.targets.empty();
+  if (tracker && !nominal.is_stewart())
+    throw InputError("--targets: the hybrid is measured by seed 000's gauge (gauge_radius); other targets are "
+                     "simulated for the 6-UPS so far");
+  if (options.targets.size() > 3) throw InputError("--targets: at most three targets (t1..t3)");
+  if (options.instrument_frame && !tracker)
+    throw InputError("--instrument-frame applies to target measurements (--targets)");
   PoseTable out = poses;
-  out.has_measured = true;
-  out.has_targets = nominal.is_hybrid();
+  out.has_measured = !tracker;
+  out.target_count = nominal.is_hybrid() ? 3 : int(options.targets.size());
+  out.has_targets = out.target_count > 0;
   out.has_status = false;
   out.ignored_columns.clear();
   report = SimulateReport{};
@@ -125,6 +133,18 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
       if (warn)
         warn(format_location(poses.file, row.line, 0) + ": warning: row '" + row.id + "': " + r.stage +
              " failed (" + to_string(r.status) + "); written with empty measurements and status '" + row.status + "'");
+      continue;
+    }
+    if (tracker) {
+      // Each target where the tracker sees it: T_IB · X · t_k, plus noise.
+      const Pose<double> seen = options.instrument_frame.value_or(Pose<double>{}) * r.pose;
+      Eigen::Matrix<double, 3, 3> t = Eigen::Matrix<double, 3, 3>::Zero();
+      for (std::size_t k = 0; k < options.targets.size(); ++k) {
+        t.col(Eigen::Index(k)) = seen.transform(options.targets[k]);
+        for (int a = 0; a < 3; ++a) t(a, Eigen::Index(k)) += noise(options.noise_mm);
+      }
+      row.targets = t;
+      ++report.simulated;
       continue;
     }
     Vec6<double> m = r.pose.to_xyz_rpy();

@@ -60,7 +60,7 @@ struct PoseRow {
   Role role = Role::Cal;
   Vec6<double> commanded = Vec6<double>::Zero();  // x, y, z, rx, ry, rz
   std::optional<Vec6<double>> measured;           // mx .. mrz
-  std::optional<Eigen::Matrix<double, 3, 3>> targets;  // t1..t3 as columns
+  std::optional<Eigen::Matrix<double, 3, 3>> targets;  // t1..tk as columns (k = PoseTable::target_count; the rest 0)
   std::optional<Eigen::VectorXd> q;               // q1..qN
   std::optional<double> temp, time;
   std::optional<Eigen::VectorXi> dir;             // dir1..dirN, each −1 or +1
@@ -75,6 +75,9 @@ struct PoseTable {
   bool has_layer = false, has_role = false, has_measured = false, has_targets = false, has_q = false,
        has_temp = false, has_time = false, has_dir = false, has_status = false;
   std::vector<std::string> ignored_columns;  // unknown columns, in file order
+  // Laser-tracker targets per row: t1 .. t<target_count> (0–3; has_targets
+  // when > 0). The hybrid's gauge has all three.
+  int target_count = 0;
 };
 
 struct PoseTableOptions {

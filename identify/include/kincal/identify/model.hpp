@@ -31,6 +31,12 @@ struct CalibrationModel {
   // Identified physical effects (identify/effects.hpp), "effects" in the
   // JSON; `effects.to_core(nominal)` is what the controller corrects.
   EffectValues effects;
+  // The laser tracker the model was identified with (stewart_target_calibration.hpp),
+  // "instrument" in the JSON: reg_x .. reg_rz (the base frame's pose in the
+  // instrument frame; `identifiable` false when it was given, not identified)
+  // and t1x .. t3z (the targets' positions on the platform). Empty for a
+  // model from full poses or the gauge.
+  std::vector<ModelParameter> instrument;
   // Where each value stood in the MODEL.json it was read from (parse_model;
   // empty for a model made in memory), keyed by parameter name ("dXB1") or
   // "effect:parameter" ("scale:s2"): a fault found later, such as a table
@@ -50,5 +56,7 @@ void write_model_file(const CalibrationModel& model, const std::string& path, co
 // an unknown parameter name for the robot, or a non-finite value.
 CalibrationModel parse_model(const std::string& text, const std::string& file);
 CalibrationModel read_model_file(const std::string& path);
+// reg_x .. reg_rz and t1x .. t3z.
+bool is_instrument_parameter(const std::string& name);
 
 }  // namespace kincal::identify

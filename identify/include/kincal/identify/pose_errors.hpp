@@ -44,6 +44,9 @@ struct PoseErrorReport {
   std::vector<UnevaluatedRow> unevaluated;
   PoseErrorStats all;
   std::map<std::string, PoseErrorStats> groups;  // "cal", "test", "layer N", "layer N test", ...
+  // Rows are target points (laser-tracker targets, stewart_target_calibration.hpp):
+  // positions only, no orientation was measured.
+  bool target_points = false;
 };
 
 // measured − commanded. Throws InputError if the table has no measured pose

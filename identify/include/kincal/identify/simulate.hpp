@@ -7,6 +7,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
+#include <vector>
 #include <string>
 
 #include "kincal/identify/csv.hpp"
@@ -24,6 +26,13 @@ struct SimulateOptions {
   // approach directions and static load), thermal scales the reached pose
   // about the base origin; needs a temp column when thermal is non-zero.
   EffectValues effects;
+  // 6-UPS: measure laser-tracker targets at these positions on the platform
+  // (platform frame, mm; 1–3 of them: the machine's true targets, which may
+  // differ from the description's `targets`) instead of full poses.
+  std::vector<Vec3<double>> targets;
+  // With `targets`: the pose of the robot's base frame in the instrument's
+  // frame (the registration); the targets are written in the instrument frame.
+  std::optional<Pose<double>> instrument_frame;
 };
 
 struct SimulateReport {
@@ -40,7 +49,8 @@ Eigen::Matrix<double, 3, 3> gauge_targets(const HybridGeometry<double>& g, doubl
 // Simulates every row of `poses`: q = the row's q1..q6 if given, else the
 // nominal IK of the commanded pose; the actual pose = FK of `actual` from the
 // commanded pose (stewart) or the nominal IK's passive configuration (hybrid).
-// Output: measured pose columns (stewart) or pose + gauge targets (hybrid); the
+// Output: measured pose columns (stewart), target positions t1..tk (stewart
+// with options.targets; noise_mm on each coordinate) or pose + gauge targets (hybrid); the
 // input's id/layer/role/q/temp/time/dir columns are kept. A row whose IK or FK
 // fails keeps empty measurements, gets its reason in a `status` column, and is
 // reported through `warn` as "FILE:LINE: warning: ...".

@@ -1,0 +1,108 @@
+// Calibration of a 6-UPS from laser-tracker targets (issue #12 item 2): one
+// to three targets on the platform, their positions measured per pose in the
+// base frame or, with `instrument_frame`, in the tracker's own frame.
+//
+// Unknowns: seed 001's 42 joint errors (stewart_calibration.hpp), the
+// targets' positions on the platform (3 per target) and, in the tracker's
+// frame, its registration (6). Positions of targets fix the machine only up
+// to two rigid motions, so a convention closes them
+// (target_measurement.hpp rigid_motion_rows):
+//   - the platform joints' errors carry no net rigid motion (moving all of
+//     them and the targets together changes no measurement);
+//   - in the tracker's frame, neither do the base joints' (moving all of them
+//     is a change of registration).
+// The fit is Gauss–Newton on the nonlinear model (exact FK of the corrected
+// machine) in the coordinates of the convention's null space, damped as every
+// host fit (least_squares_step.hpp), from the nominal machine and the rigid
+// fit of measured against nominal targets.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kincal/core/pose.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/pose_errors.hpp"
+#include "kincal/identify/robot.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+
+namespace kincal::identify {
+
+struct StewartTargetOptions {
+  // The measurements are in the instrument's own frame, unknown to the tool:
+  // its registration is identified. false: they are in the robot's base frame.
+  bool instrument_frame = false;
+  int max_iterations = 60;
+};
+
+// A combination of parameters the data determine worst: the unit direction
+// (rotations weighted by 1 m, so every term is in mm) and its standard
+// deviation at the data's noise.
+struct WeakCombination {
+  double standard_deviation_mm = 0;
+  std::vector<std::pair<std::string, double>> terms;  // largest first, |coefficient| ≥ 0.1
+};
+
+struct StewartTargetCalibration {
+  Eigen::VectorXd theta;           // seed 001's 42 errors, in the convention above
+  Eigen::VectorXd standard_error;  // of theta
+  bool instrument_frame = false;
+  Pose<double> registration;       // base frame in the instrument frame (identity unless instrument_frame)
+  Vec6<double> registration_standard_error = Vec6<double>::Zero();  // of its twist (mm, rad; instrument axes)
+  std::vector<Vec3<double>> targets;                // identified positions on the platform, mm
+  std::vector<Vec3<double>> target_standard_error;  // of each coordinate
+  std::vector<StewartIteration> history;  // rms_position_mm: RMS target residual per coordinate
+  std::size_t nodes = 0;
+  int free_parameters = 0;         // 42 + 3k (+ 6) minus the convention's 6 (+ 6)
+  int rank = 0;
+  double condition_number = 0;     // of the column-scaled design in the convention's coordinates
+  double sigma_mm = 0;             // per target coordinate: (RSS / (n − p))^½
+  std::vector<WeakCombination> weakest;  // the three worst-determined combinations, worst first
+  std::vector<NodeTest> node_tests;
+  std::vector<std::string> outliers;
+  double outlier_p_threshold = 0;
+  LinearProblem final_problem;     // the design at the solution (row_node: node index), residuals as y
+  OutlierReport outlier_report;
+};
+
+// Identifies from the table's cal rows with target positions (t1..tk). The
+// robot description's `targets` are the nominal positions (their count must be
+// the table's). Throws InputError for a robot without `targets`, a count
+// mismatch, too few nodes, a design that does not determine the parameters
+// (naming the weakest combination), or FK failures.
+StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const PoseTable& data,
+                                                   const StewartTargetOptions& options = {});
+
+// The registration that lays the nominal machine's targets (FK of the rows'
+// commands) best onto the measured ones, over every usable cal row: the fit's
+// start in the instrument frame, and the nominal model's for its residuals.
+Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data);
+
+// The outlier screen of identify/outliers.hpp around it.
+struct StewartTargetOutlierSearch {
+  std::vector<NodeTest> removed;
+  StewartTargetCalibration rest;
+  bool systematic = false;
+};
+StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, const PoseTable& data,
+                                                         const StewartTargetCalibration& all,
+                                                         const StewartTargetOptions& options = {});
+inline const OutlierReport* outlier_report_of(const StewartTargetCalibration& c) { return &c.outlier_report; }
+
+// Residuals at the target points of every measured row: measured − the
+// model's prediction (FK of `robot` for the row's commands — q1..q6 or the
+// nominal IK of the commanded pose — then the
+// registration and targets). One report row per target point (id "ROW:tK"),
+// position only (PoseErrorReport::target_points).
+PoseErrorReport stewart_target_residuals(const Robot& nominal, const Robot& robot, const Pose<double>& registration,
+                                         const std::vector<Vec3<double>>& targets, const PoseTable& data);
+
+// MODEL.json: the 42 errors, and the instrument (registration and targets).
+CalibrationModel stewart_target_model(const Robot& nominal, const StewartTargetCalibration& c,
+                                      const std::string& data_file);
+
+}  // namespace kincal::identify
