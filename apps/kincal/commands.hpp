@@ -58,7 +58,11 @@ int run_identify(const IdentifyArgs& args);
 // A measurement file for identify / diagnose, with its warnings, and one
 // warning per row and joint outside the robot file's limits (the rows are
 // used: identify/joint_limits.hpp).
-kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& robot, const std::string& path);
+// `instrument_frame` (--instrument-frame): the table's targets are in the
+// instrument's frame (PoseTable::in_instrument_frame); refused for a table
+// without targets and for the hybrid.
+kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& robot, const std::string& path,
+                                              bool instrument_frame = false);
 
 // Warns (one line) when the identified model needs corrections above the
 // robot's correction bound on the measured poses (issue #11 item 3), naming
@@ -79,7 +83,7 @@ struct DiagnoseArgs {
   std::string robot, data, json, report, effects;
   std::optional<double> noise_um, noise_urad;
   double alpha = 0.01;
-  bool quiet = false, keep_outliers = false;
+  bool quiet = false, keep_outliers = false, instrument_frame = false;
 };
 CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& args);
 int run_diagnose(const DiagnoseArgs& args);
@@ -107,6 +111,6 @@ int run_plan(const PlanArgs& args);
 // (identify/effect_calibration.hpp).
 int run_identify_with_effects(const kincal::identify::Robot& robot, const std::string& data, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json,
-                              double effect_alpha, double ridge_k, bool keep_outliers);
+                              double effect_alpha, double ridge_k, bool keep_outliers, bool instrument_frame);
 
 }  // namespace kincal_app

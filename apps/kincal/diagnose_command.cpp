@@ -40,6 +40,9 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
               "diagnose with every cal node, also those inconsistent with the others (default: they are listed and "
               "left out, unless the misfit is systematic)");
   d->add_flag("--quiet", a.quiet, "no progress lines on stderr");
+  d->add_flag("--instrument-frame", a.instrument_frame,
+              "6-UPS with target columns t1x..: the targets are measured in the instrument's own frame; its "
+              "registration is identified with the base model (docs/identify.md)");
   return d;
 }
 
@@ -63,7 +66,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   if (!a.report.empty()) outs.push_back(a.report);
   ki::check_outputs(outs, inputs);
   const ki::Robot robot = ki::load_robot(a.robot);
-  const ki::PoseTable data = read_measurements(robot, a.data);
+  const ki::PoseTable data = read_measurements(robot, a.data, a.instrument_frame);
 
   ki::DiagnoseOptions opt;
   if (a.noise_um) {
@@ -88,7 +91,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   print_outliers(a.data, d.outliers, d.outliers.excluded ? d.rms.cal_nodes + d.outliers.flagged.size() : d.rms.cal_nodes,
                  a.keep_outliers);
   std::cout << "  noise " << um(d.noise_um) << " (" << d.noise_source << ")";
-  if (robot.is_stewart())
+  if (!d.noise_urad_source.empty())  // orientations measured (full poses)
     std::cout << ", orientation " << d.noise_urad << " urad (" << d.noise_urad_source << ")";
   std::cout << "; base model RMS cal " << um(d.rms.cal)
             << ", test " << um(d.rms.test) << "\n";

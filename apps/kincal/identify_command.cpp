@@ -291,8 +291,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
 int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
   if (!a.estimator.empty() && a.estimator != "ols")
     throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
-  ki::StewartTargetOptions options;
-  options.instrument_frame = a.instrument_frame;
+  const ki::StewartTargetOptions options;
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001 from "
             << data.target_count << " target(s) measured in the "
             << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
@@ -387,24 +386,17 @@ int run_identify(const IdentifyArgs& a) {
     const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
     (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
-                                                 k, a.keep_outliers);
+                                                 k, a.keep_outliers, a.instrument_frame);
   }
-  if (robot.is_hybrid()) {
-    if (a.instrument_frame)
-      throw ki::InputError("--instrument-frame: the hybrid's gauge is measured in the workpiece frame; other targets "
-                           "are implemented for the 6-UPS so far");
-    return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data));
-  }
+  if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data, a.instrument_frame));
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
   if (estimator == "liu")
     throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
                          "000's estimator for the hybrid's fine stage");
   if (!a.coarse_layers.empty()) throw ki::InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
-  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data);
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
   // Targets are used when they are all the table has, or when asked for.
-  if (data.has_targets && (!data.has_measured || a.instrument_frame)) return run_identify_targets(a, robot, data);
-  if (a.instrument_frame)
-    throw ki::InputError(a.data, 1, 0, "--instrument-frame needs target columns t1x.. (laser-tracker targets)");
+  if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
   ki::StewartCalibrationOptions so;
   so.estimator = estimator_options(a, estimator);
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";

@@ -18,9 +18,9 @@ namespace kincal_app {
 
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
-                              double effect_alpha, double ridge_k, bool keep_outliers) {
+                              double effect_alpha, double ridge_k, bool keep_outliers, bool instrument_frame) {
   const std::vector<std::string> names = effect_list(effects);
-  const ki::PoseTable data = read_measurements(robot, data_path);
+  const ki::PoseTable data = read_measurements(robot, data_path, instrument_frame);
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
   opt.estimator = estimator;

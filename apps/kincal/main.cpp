@@ -141,11 +141,19 @@ std::vector<std::string> kincal_app::effect_list(const std::string& list) {
   return names;
 }
 
-ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::string& path) {
+ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::string& path, bool instrument_frame) {
   ki::PoseTableOptions options;
   options.joint_count = ki::Robot::joint_count();
   options.warn = warn;
   ki::PoseTable data = ki::read_pose_table(path, options);
+  if (instrument_frame) {
+    if (robot.is_hybrid())
+      throw ki::InputError("--instrument-frame: the hybrid's gauge is measured in the workpiece frame; targets in an "
+                           "instrument's frame are implemented for the 6-UPS so far");
+    if (!data.has_targets)
+      throw ki::InputError(path, 1, 0, "--instrument-frame needs target columns t1x.. (laser-tracker targets)");
+    data.in_instrument_frame = true;
+  }
   for (const std::string& w : ki::joint_limit_warnings(robot, data)) warn(w);
   return data;
 }

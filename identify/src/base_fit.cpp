@@ -11,6 +11,7 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
+#include "kincal/identify/stewart_target_calibration.hpp"
 
 namespace kincal::identify::detail {
 
@@ -32,9 +33,41 @@ Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
   return row.q ? Vec6<double>(row.q->head<6>()) : node.q;
 }
 
+// Laser-tracker targets (stewart_target_calibration.hpp): per node the target
+// residuals, their map M and the design rows in the frame convention's
+// coordinates.
+BaseModel stewart_target_base(const Robot& robot, const PoseTable& data,
+                              const std::vector<std::optional<EffectNode>>& en) {
+  const StewartTargetCalibration cal = calibrate_stewart_targets(robot, data);
+  BaseModel base;
+  base.description = "seed 001 42-parameter model from " + std::to_string(data.target_count) + " target(s)" +
+                     (data.in_instrument_frame ? " in the instrument's frame (registration identified)" : "") +
+                     " (Gauss-Newton, " + std::to_string(cal.history.size()) + " evaluations)";
+  base.parameters = cal.free_parameters;
+  for (std::size_t k = 0; k < data.rows.size(); ++k) {
+    const PoseRow& row = data.rows[k];
+    if (!row.targets || !usable(row) || !en[k]) continue;
+    TargetRowModel at;
+    if (!stewart_target_row(robot, cal, joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), *row.targets,
+                            at))
+      continue;
+    NodeData n;
+    n.row = k;
+    n.test = row.role == Role::Test;
+    n.r = std::move(at.residual);
+    n.M = std::move(at.M);
+    n.H = std::move(at.H);
+    n.effect = *en[k];
+    base.nodes.push_back(std::move(n));
+  }
+  base.model = stewart_target_model(robot, cal, data.file);
+  return base;
+}
+
 BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
                        const std::string& estimator) {
   (void)estimator;  // seed 001's model is fitted by OLS
+  if (uses_target_model(robot, data)) return stewart_target_base(robot, data, en);
   const StewartCalibration cal = calibrate_stewart(robot, data);
   const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits
   BaseModel base;
@@ -51,6 +84,7 @@ BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vec
     NodeData n;
     n.row = k;
     n.test = row.role == Role::Test;
+    n.pose_rows = true;
     n.r = w.asDiagonal() * pose_error(measured, predicted);
     n.M = w.asDiagonal();
     n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted);
@@ -310,6 +344,12 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
                                  const std::vector<std::optional<EffectNode>>& nodes, const EffectParameters<double>& e) {
   PoseTable out = data;
   out.has_q = true;
+  // Targets in the instrument's frame: the base-frame shift below is turned
+  // into it by the registration (its rigid-fit estimate: only its rotation
+  // matters, and to rounding of a micrometre-sized shift).
+  Mat3<double> to_measurement = Mat3<double>::Identity();
+  if (data.in_instrument_frame && data.has_targets && e.thermal != 0)
+    to_measurement = nominal_registration(robot, data).R;
   for (std::size_t k = 0; k < out.rows.size(); ++k) {
     PoseRow& row = out.rows[k];
     if (!nodes[k]) continue;
@@ -325,11 +365,10 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
     const double scale = 1.0 / (1.0 + thermal_strain(e, *row.temp));
     if (row.measured) row.measured->head<3>() = e.thermal_origin + scale * (row.measured->head<3>() - e.thermal_origin);
     if (row.targets) {
-      const Vec3<double> shift = (scale - 1.0) * (nodes[k]->pose.p - e.thermal_origin);
-      row.targets->colwise() += shift;
+      const Vec3<double> shift = to_measurement * ((scale - 1.0) * (nodes[k]->pose.p - e.thermal_origin));
+      row.targets->leftCols(data.target_count).colwise() += shift;
     }
   }
-  (void)robot;
   return out;
 }
 

@@ -29,6 +29,9 @@ constexpr double kOrientationWeightMm = 200.0;
 struct NodeData {
   std::size_t row = 0;
   bool test = false;
+  // A 6-UPS's measured pose: rows 3–5 are orientations (in mm at
+  // kOrientationWeightMm). false: every row is a position (gauge, targets).
+  bool pose_rows = false;
   Eigen::VectorXd r;  // base-model residual in measurement space, mm
   Eigen::MatrixXd M;  // measurement map: Δy = M·twist
   Eigen::MatrixXd H;  // base design rows at the solution

@@ -117,7 +117,7 @@ double chi2_upper_tail(double chi2, double dof) {
 // Which residual coordinates of a node are of one kind: the 6-UPS's pose has
 // positions (0–2) and orientations (3–5, in mm at detail::kOrientationWeightMm); the
 // hybrid's gauge has positions only (all 9).
-bool in_kind(const NodeData& n, Index i, bool orientation) { return n.r.size() == 6 ? (i >= 3) == orientation : !orientation; }
+bool in_kind(const NodeData& n, Index i, bool orientation) { return n.pose_rows ? (i >= 3) == orientation : !orientation; }
 
 // Pooled within-group variance of repeated nodes (same commanded pose), over
 // one kind of coordinate; σ in the residual's units (mm).
@@ -212,7 +212,7 @@ std::optional<NeighbourNoise> neighbour_noise(const PoseTable& data, const BaseM
 // for every row of the stacked problem.
 void scale_orientation_rows(BaseModel& base, double factor) {
   for (NodeData& n : base.nodes) {
-    if (n.r.size() != 6) continue;
+    if (!n.pose_rows) continue;
     n.r.tail(3) *= factor;
     n.M.bottomRows(3) *= factor;
     n.H.bottomRows(3) *= factor;
@@ -227,16 +227,23 @@ struct NodeTwist {
   Vec6<double> joint_noise_sd;  // its standard deviation from measurement noise of σ = 1
 };
 
+// One or two targets do not measure a node's whole twist (one: no rotation;
+// two: none about their line): the twist is then the least-norm one and the
+// per-joint picture is left out (DiagnosisRun::by_joint).
+bool measures_twist(const NodeData& n) { return Eigen::CompleteOrthogonalDecomposition<MatrixXd>(n.M).rank() == 6; }
+
 NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
   NodeTwist out;
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(n.M);
-  out.twist = qr.solve(r);
+  const Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod(n.M);
+  out.twist = cod.solve(r);
   const Eigen::PartialPivLU<Mat6<double>> J(n.effect.joint_twist);
   out.joint = J.solve(out.twist);
-  // Cov(twist) = (MᵀM)⁻¹ for unit noise; Cov(joint) = J⁻¹ (MᵀM)⁻¹ J⁻ᵀ.
+  // Cov(twist) = (MᵀM)⁻¹ for unit noise (its pseudo-inverse when M does not
+  // measure the whole twist); Cov(joint) = J⁻¹ (MᵀM)⁻¹ J⁻ᵀ.
   const Mat6<double> MtM = (n.M.transpose() * n.M);
   const Mat6<double> Jinv = J.inverse();
-  const Mat6<double> cov = Jinv * MtM.inverse() * Jinv.transpose();
+  const Mat6<double> cov =
+      Jinv * Eigen::CompleteOrthogonalDecomposition<Mat6<double>>(MtM).pseudoInverse() * Jinv.transpose();
   out.joint_noise_sd = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
   return out;
 }
@@ -368,8 +375,10 @@ void DiagnosisRun::check_inputs() {
   d.robot = robot.name;
   d.data_file = data.file;
   d.family = robot.family();
-  if (robot.is_stewart() && !data.has_measured)
-    throw InputError(data.file, 1, 0, "needs the measured pose columns mx,my,mz,mrx,mry,mrz to diagnose a 6-UPS");
+  if (robot.is_stewart() && !data.has_measured && !data.has_targets)
+    throw InputError(data.file, 1, 0,
+                     "needs the measured pose columns mx,my,mz,mrx,mry,mrz or target positions t1x.. to diagnose a "
+                     "6-UPS");
   if (robot.is_hybrid() && data.target_count != 3)
     throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
@@ -414,7 +423,9 @@ void DiagnosisRun::set_noise() {
     d.noise_um = estimate(false, d.noise_source) * kMicro;
   }
   orientation_factor = 1.0;
-  if (robot.is_stewart()) {
+  const bool measures_orientation =
+      std::any_of(base.nodes.begin(), base.nodes.end(), [](const NodeData& n) { return n.pose_rows; });
+  if (measures_orientation) {
     if (options.noise_urad) {
       d.noise_urad = *options.noise_urad;
       d.noise_urad_source = "given";
@@ -433,7 +444,8 @@ void DiagnosisRun::set_noise() {
     orientation_factor = std::clamp(orientation_factor, 1e-3, 1e3);
     scale_orientation_rows(base, orientation_factor);
   } else if (options.noise_urad) {
-    d.notes.push_back("--noise-urad ignored: the hybrid's gauge measures positions only");
+    d.notes.push_back(std::string("--noise-urad ignored: ") +
+                      (robot.is_hybrid() ? "the hybrid's gauge" : "the targets") + " measure positions only");
   }
 }
 
@@ -813,6 +825,10 @@ void DiagnosisRun::by_region() {
 }
 
 void DiagnosisRun::by_joint() {
+  if (!std::all_of(base.nodes.begin(), base.nodes.end(), measures_twist)) {
+    d.notes.push_back("fewer than three targets do not measure each node's whole pose: no per-joint residual map");
+    return;
+  }
   // Joints: the implied joint-space residual, standardised by its noise, in
   // bins of the joint's own position (a local error in part of a stroke).
   struct JointFinding {

@@ -1,4 +1,5 @@
 #include "kincal/identify/effect_calibration.hpp"
+#include "kincal/identify/stewart_target_calibration.hpp"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -318,8 +319,9 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   const bool choose_k = options.estimator != "ols" && !(options.ridge_k > 0);
   auto fit = [&]() {
     if (!robot.is_hybrid()) {
-      rep.base = "seed 001's iterated least squares (OLS)";
-      return alternate(robot, data, nodes, list, held, options, values, rep);
+      detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep);
+      rep.base = uses_target_model(robot, data) ? b.description : "seed 001's iterated least squares (OLS)";
+      return b;
     }
     std::vector<HybridCompensation> starts;
     if (!hybrid) {

@@ -108,6 +108,21 @@ struct Layout {
   int size() const { return targets_at() + 3 * targets; }
 };
 
+// The design rows of one pose over the full x (3k × layout.size()): the
+// joint errors through the measurement map (H = M·B, seed 000 Eq. (10) with
+// the targets' M), then the instrument's own columns.
+Eigen::MatrixXd full_design_rows(const StewartGeometry<double>& g, const Pose<double>& registration,
+                                 const std::vector<Vec3<double>>& targets, const Pose<double>& pose,
+                                 const Layout& layout) {
+  const Eigen::Index rows = 3 * layout.targets;
+  Eigen::MatrixXd X(rows, layout.size());
+  X.leftCols(kJointErrors) = target_map(registration, pose, targets) * stewart_error_jacobian(g, pose);
+  const Eigen::MatrixXd inst = instrument_columns(registration, pose, targets);
+  if (layout.registration) X.middleCols(layout.registration_at(), 6) = inst.leftCols<6>();
+  X.middleCols(layout.targets_at(), 3 * layout.targets) = inst.rightCols(3 * layout.targets);
+  return X;
+}
+
 // The convention's null space N (x = N·φ keeps every convention row zero).
 Eigen::MatrixXd convention_basis(const StewartGeometry<double>& g, const Layout& layout) {
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(layout.registration ? 12 : 6, layout.size());
@@ -175,7 +190,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
                                                    const StewartTargetOptions& options) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);  // measured rows: the machine was there (joint_limits.hpp)
-  const Layout layout{data.target_count, options.instrument_frame};
+  const Layout layout{data.target_count, data.in_instrument_frame};
   const Eigen::MatrixXd N = convention_basis(nominal.stewart(), layout);
   const int p = int(N.cols());
   std::vector<TargetNode> nodes = target_nodes(open, data, p);
@@ -186,13 +201,14 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
   // The nominal machine's poses, then (in the instrument frame) the
   // registration that best lays the nominal targets onto the measured ones.
   StewartTargetCalibration out;
-  out.instrument_frame = options.instrument_frame;
+  out.instrument_frame = data.in_instrument_frame;
   out.nodes = nodes.size();
   out.free_parameters = p;
+  out.convention_basis = N;
   out.theta = Eigen::VectorXd::Zero(kJointErrors);
   out.targets = nominal.targets;
   nominal_poses(open, data, nodes);
-  if (options.instrument_frame) out.registration = registration_of(nodes, out.targets);
+  if (data.in_instrument_frame) out.registration = registration_of(nodes, out.targets);
 
   // The descent (least_squares_step.hpp) on φ, x = N·φ.
   struct State {
@@ -224,15 +240,9 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
   };
   Eigen::MatrixXd X(n, layout.size());
   auto linearise = [&](Eigen::MatrixXd& design, Eigen::VectorXd& y) {
-    for (std::size_t k = 0; k < nodes.size(); ++k) {
-      const Eigen::Index r = rows * Eigen::Index(k);
-      const Pose<double>& pose = current.poses[k];
-      X.block(r, 0, rows, kJointErrors) =
-          target_map(current.registration, pose, current.targets) * stewart_error_jacobian(g, pose);
-      const Eigen::MatrixXd inst = instrument_columns(current.registration, pose, current.targets);
-      if (layout.registration) X.block(r, layout.registration_at(), rows, 6) = inst.leftCols<6>();
-      X.block(r, layout.targets_at(), rows, 3 * layout.targets) = inst.rightCols(3 * layout.targets);
-    }
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+      X.middleRows(rows * Eigen::Index(k), rows) =
+          full_design_rows(g, current.registration, current.targets, current.poses[k], layout);
     design = X * N;
     y = residual;
   };
@@ -321,6 +331,21 @@ Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data) {
   std::vector<TargetNode> nodes = target_nodes(open, data, 0);
   nominal_poses(open, data, nodes);
   return registration_of(nodes, nominal.targets);
+}
+
+bool stewart_target_row(const Robot& nominal, const StewartTargetCalibration& c, const Vec6<double>& q,
+                        const Pose<double>& guess, const Eigen::Matrix<double, 3, 3>& measured, TargetRowModel& out) {
+  const Layout layout{int(c.targets.size()), c.instrument_frame};
+  const StewartGeometry<double> g = stewart_with_errors(without_limits(nominal.stewart()), c.theta);
+  if (stewart_fk(g, q, guess, out.pose).status != Status::Ok) return false;
+  out.residual = (measured.leftCols(layout.targets) - predicted_targets(c.registration, out.pose, c.targets)).reshaped();
+  out.M = target_map(c.registration, out.pose, c.targets);
+  out.H = full_design_rows(g, c.registration, c.targets, out.pose, layout) * c.convention_basis;
+  return true;
+}
+
+bool uses_target_model(const Robot& robot, const PoseTable& data) {
+  return robot.is_stewart() && data.has_targets && (!data.has_measured || data.in_instrument_frame);
 }
 
 StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, const PoseTable& data,

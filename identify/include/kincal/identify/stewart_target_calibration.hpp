@@ -33,9 +33,6 @@
 namespace kincal::identify {
 
 struct StewartTargetOptions {
-  // The measurements are in the instrument's own frame, unknown to the tool:
-  // its registration is identified. false: they are in the robot's base frame.
-  bool instrument_frame = false;
   int max_iterations = 60;
 };
 
@@ -67,9 +64,28 @@ struct StewartTargetCalibration {
   double outlier_p_threshold = 0;
   LinearProblem final_problem;     // the design at the solution (row_node: node index), residuals as y
   OutlierReport outlier_report;
+  Eigen::MatrixXd convention_basis;  // N: x = N·φ (x: 42 errors, registration twist if free, 3 per target)
 };
 
-// Identifies from the table's cal rows with target positions (t1..tk). The
+// Whether a 6-UPS table is identified from its targets: it has target columns
+// and no measured poses, or its targets are in the instrument's frame.
+bool uses_target_model(const Robot& robot, const PoseTable& data);
+
+// One row at a calibration's solution, for the diagnosis and the effect fits
+// (identify/src/base_fit.hpp): the model's pose for commands q (FK from
+// `guess`), the target residual (3k), the measurement map M (3k × 6) and the
+// design rows in the convention's coordinates (3k × free_parameters).
+struct TargetRowModel {
+  Pose<double> pose;
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd M, H;
+};
+bool stewart_target_row(const Robot& nominal, const StewartTargetCalibration& c, const Vec6<double>& q,
+                        const Pose<double>& guess, const Eigen::Matrix<double, 3, 3>& measured, TargetRowModel& out);
+
+// Identifies from the table's cal rows with target positions (t1..tk), in the
+// robot's base frame or, with data.in_instrument_frame, in the instrument's
+// (its registration identified). The
 // robot description's `targets` are the nominal positions (their count must be
 // the table's). Throws InputError for a robot without `targets`, a count
 // mismatch, too few nodes, a design that does not determine the parameters
