@@ -293,7 +293,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
   const ki::StewartTargetOptions options;
   std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001 from "
-            << data.target_count << " target(s) measured in the "
+            << data.target_columns() << " target(s) measured in the "
             << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
   const ki::StewartTargetCalibration c = ki::calibrate_stewart_targets(robot, data, options);
   std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (42 joint errors, "
@@ -347,7 +347,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     j["robot"] = robot.name;
     j["data"] = a.data;
     j["estimator"] = "ols";
-    j["measurement"] = {{"targets", data.target_count}, {"instrument_frame", a.instrument_frame}};
+    j["measurement"] = {{"targets", data.target_columns()}, {"instrument_frame", a.instrument_frame}};
     j["rank"] = used.rank;
     j["parameters"] = used.free_parameters;
     j["dropped"] = nlohmann::json::array();

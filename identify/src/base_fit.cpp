@@ -40,7 +40,7 @@ BaseModel stewart_target_base(const Robot& robot, const PoseTable& data,
                               const std::vector<std::optional<EffectNode>>& en) {
   const StewartTargetCalibration cal = calibrate_stewart_targets(robot, data);
   BaseModel base;
-  base.description = "seed 001 42-parameter model from " + std::to_string(data.target_count) + " target(s)" +
+  base.description = "seed 001 42-parameter model from " + std::to_string(data.target_columns()) + " target(s)" +
                      (data.in_instrument_frame ? " in the instrument's frame (registration identified)" : "") +
                      " (Gauss-Newton, " + std::to_string(cal.history.size()) + " evaluations)";
   base.parameters = cal.free_parameters;
@@ -366,7 +366,7 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
     if (row.measured) row.measured->head<3>() = e.thermal_origin + scale * (row.measured->head<3>() - e.thermal_origin);
     if (row.targets) {
       const Vec3<double> shift = to_measurement * ((scale - 1.0) * (nodes[k]->pose.p - e.thermal_origin));
-      row.targets->leftCols(data.target_count).colwise() += shift;
+      row.targets->leftCols(data.target_columns()).colwise() += shift;
     }
   }
   return out;

@@ -398,7 +398,7 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
   for (const char* c : {"x", "y", "z", "rx", "ry", "rz"}) header.push_back(c);
   if (t.has_measured)
     for (const char* c : {"mx", "my", "mz", "mrx", "mry", "mrz"}) header.push_back(c);
-  for (int k = 1; k <= t.target_count; ++k)
+  for (int k = 1; k <= t.target_columns(); ++k)
     for (const char* c : {"x", "y", "z"}) header.push_back("t" + std::to_string(k) + c);
   if (t.has_q)
     for (const auto& c : numbered("q", n)) header.push_back(c);
@@ -417,7 +417,7 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
     for (int k = 0; k < 6; ++k) f.push_back(format_number(r.commanded(k)));
     if (t.has_measured)
       for (int k = 0; k < 6; ++k) f.push_back(r.measured ? format_number((*r.measured)(k)) : "");
-    for (int k = 0; k < 3 * t.target_count; ++k) f.push_back(r.targets ? format_number(r.targets->data()[k]) : "");
+    for (int k = 0; k < 3 * t.target_columns(); ++k) f.push_back(r.targets ? format_number(r.targets->data()[k]) : "");
     if (t.has_q)
       for (int k = 0; k < n; ++k) f.push_back(r.q ? format_number((*r.q)(k)) : "");
     if (t.has_temp) f.push_back(r.temp ? format_number(*r.temp) : "");

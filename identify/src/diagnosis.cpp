@@ -230,12 +230,13 @@ struct NodeTwist {
 // One or two targets do not measure a node's whole twist (one: no rotation;
 // two: none about their line): the twist is then the least-norm one and the
 // per-joint picture is left out (DiagnosisRun::by_joint).
-bool measures_twist(const NodeData& n) { return Eigen::CompleteOrthogonalDecomposition<MatrixXd>(n.M).rank() == 6; }
+bool measures_twist(const NodeData& n) { return Eigen::ColPivHouseholderQR<MatrixXd>(n.M).rank() == 6; }
 
 NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
   NodeTwist out;
-  const Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod(n.M);
-  out.twist = cod.solve(r);
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(n.M);
+  const bool whole = qr.rank() == 6;
+  out.twist = whole ? VectorXd(qr.solve(r)) : VectorXd(Eigen::CompleteOrthogonalDecomposition<MatrixXd>(n.M).solve(r));
   const Eigen::PartialPivLU<Mat6<double>> J(n.effect.joint_twist);
   out.joint = J.solve(out.twist);
   // Cov(twist) = (MᵀM)⁻¹ for unit noise (its pseudo-inverse when M does not
@@ -243,7 +244,9 @@ NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
   const Mat6<double> MtM = (n.M.transpose() * n.M);
   const Mat6<double> Jinv = J.inverse();
   const Mat6<double> cov =
-      Jinv * Eigen::CompleteOrthogonalDecomposition<Mat6<double>>(MtM).pseudoInverse() * Jinv.transpose();
+      Jinv * (whole ? Mat6<double>(MtM.inverse())
+                    : Mat6<double>(Eigen::CompleteOrthogonalDecomposition<Mat6<double>>(MtM).pseudoInverse())) *
+      Jinv.transpose();
   out.joint_noise_sd = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
   return out;
 }
@@ -379,7 +382,7 @@ void DiagnosisRun::check_inputs() {
     throw InputError(data.file, 1, 0,
                      "needs the measured pose columns mx,my,mz,mrx,mry,mrz or target positions t1x.. to diagnose a "
                      "6-UPS");
-  if (robot.is_hybrid() && data.target_count != 3)
+  if (robot.is_hybrid() && data.target_columns() != 3)
     throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
   if (data.has_layer) {

@@ -74,10 +74,10 @@ Eigen::MatrixXd identification_jacobian(const HybridErrorModel& model, Measureme
 }
 
 void require_gauge_triangles(const PoseTable& data, double radius) {
-  if (data.has_targets && data.target_count != 3)
+  if (data.has_targets && data.target_columns() != 3)
     throw InputError(data.file, 1, 0,
                      "the hybrid is measured by seed 000's three-target gauge: t1x..t3z (the table has " +
-                         std::to_string(data.target_count) + " target(s))");
+                         std::to_string(data.target_columns()) + " target(s))");
   const double side = std::sqrt(3.0) * radius;
   for (const PoseRow& row : data.rows) {
     if (!row.targets) continue;

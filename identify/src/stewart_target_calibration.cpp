@@ -49,9 +49,9 @@ void require_targets(const Robot& nominal, const PoseTable& data) {
     throw InputError(data.file, 1, 0,
                      "the table has target columns t1x..; the robot description needs the targets' nominal positions "
                      "on the platform: add the key `targets` (docs/formats.md)");
-  if (int(nominal.targets.size()) != data.target_count)
+  if (int(nominal.targets.size()) != data.target_columns())
     throw InputError(data.file, 1, 0,
-                     "the table measures " + std::to_string(data.target_count) + " target(s), the robot description's "
+                     "the table measures " + std::to_string(data.target_columns()) + " target(s), the robot description's "
                          "`targets` name " + std::to_string(nominal.targets.size()));
 }
 
@@ -59,7 +59,7 @@ std::vector<TargetNode> target_nodes(const Robot& open, const PoseTable& data, i
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
     if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
-    TargetNode n{r.line, r.id, Vec6<double>::Zero(), r.targets->leftCols(data.target_count),
+    TargetNode n{r.line, r.id, Vec6<double>::Zero(), r.targets->leftCols(data.target_columns()),
                  Pose<double>::from_xyz_rpy(r.commanded)};
     if (const Status s = row_commands(open, r, n.q); s != Status::Ok)
       throw InputError(data.file, r.line, 0,
@@ -67,7 +67,7 @@ std::vector<TargetNode> target_nodes(const Robot& open, const PoseTable& data, i
                            "); give the joint commands q1..q6 or drop the row");
     nodes.push_back(std::move(n));
   }
-  const std::size_t rows_per_node = 3 * std::size_t(data.target_count);
+  const std::size_t rows_per_node = 3 * std::size_t(data.target_columns());
   const std::size_t needed = std::size_t(free_parameters) / rows_per_node + 3;
   if (nodes.size() < needed)
     throw InputError(data.file, 0, 0,
@@ -190,7 +190,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
                                                    const StewartTargetOptions& options) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);  // measured rows: the machine was there (joint_limits.hpp)
-  const Layout layout{data.target_count, data.in_instrument_frame};
+  const Layout layout{data.target_columns(), data.in_instrument_frame};
   const Eigen::MatrixXd N = convention_basis(nominal.stewart(), layout);
   const int p = int(N.cols());
   std::vector<TargetNode> nodes = target_nodes(open, data, p);
@@ -352,7 +352,7 @@ StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, c
                                                          const StewartTargetCalibration& all,
                                                          const StewartTargetOptions& options) {
   SequentialOutlierOptions so;
-  so.min_nodes = std::max<Eigen::Index>(8, Eigen::Index(all.free_parameters) / (3 * data.target_count) + 3);
+  so.min_nodes = std::max<Eigen::Index>(8, Eigen::Index(all.free_parameters) / (3 * data.target_columns()) + 3);
   ScreenedFit<StewartTargetCalibration> s = screen_and_refit(
       data, all, [](const StewartTargetCalibration& c) -> const LinearProblem& { return c.final_problem; },
       [](const StewartTargetCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },

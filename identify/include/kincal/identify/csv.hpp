@@ -78,6 +78,9 @@ struct PoseTable {
   // Laser-tracker targets per row: t1 .. t<target_count> (0–3; has_targets
   // when > 0). The hybrid's gauge has all three.
   int target_count = 0;
+  // The number of targets: target_count, or the gauge's three for a table
+  // built in code with has_targets alone (before target_count existed).
+  int target_columns() const { return target_count > 0 ? target_count : (has_targets ? 3 : 0); }
   // The targets are in the instrument's own frame (`--instrument-frame`; not
   // a column: the user says it), its registration unknown.
   bool in_instrument_frame = false;
