@@ -880,3 +880,76 @@ TEST(appKincal, RowsAndValuesAtFaultAreNamedWhereTheyStand) {
   EXPECT_TRUE(contains(sim.err, "kincal: " + errors + ":3: the machine these errors describe reaches none")) << sim.err;
   EXPECT_TRUE(contains(sim.err, "the largest error is dl3 = 1e+30")) << sim.err;
 }
+
+namespace {
+
+// A laser tracker with one target on seed 001's platform, its frame unknown
+// to the tool (issue #12 item 2), through simulate, identify, diagnose and
+// identify --effects; and the refusals around it.
+TEST(appKincal, OneTrackerTargetInItsOwnFrameThroughTheTool) {
+  ASSERT_EQ(run_tool("robot --robot stewart-seed001 --out \"" + kDir + "/tracker_robot_base.json\"").code, 0);
+  nlohmann::json robot = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_robot_base.json"));
+  robot["targets"] = {{20, 10, 30}};
+  const std::string robot_file = write("tracker_robot.json", robot.dump(2));
+  const std::string meas = kDir + "/tracker_meas.csv";
+  const ToolRun sim = run_tool("simulate --robot \"" + robot_file + "\" --poses \"" + kExamples +
+                               "/seed001/diagnosis_poses.csv\" --errors \"" + kExamples +
+                               "/seed001/errors.csv\" --targets \"20.3,9.6,30.25\" --instrument-frame "
+                               "\"-900,2100,150,0.02,-0.03,-1.2\" --noise-mm 0.005 --seed 9 --effect backlash:b2=0.02 "
+                               "--out \"" + meas + "\"");
+  ASSERT_EQ(sim.code, 0) << sim.err;
+  const std::string header = ki::read_text_file(meas).substr(0, ki::read_text_file(meas).find('\n'));
+  EXPECT_TRUE(contains(header, "t1x,t1y,t1z")) << header;
+  EXPECT_FALSE(contains(header, "t2x") || contains(header, "mx")) << header;
+
+  const ToolRun id = run_tool("identify --robot \"" + robot_file + "\" --data \"" + meas + "\" --instrument-frame --out \"" +
+                              kDir + "/tracker_model.json\" --json \"" + kDir + "/tracker_summary.json\"");
+  ASSERT_EQ(id.code, 0) << id.err;
+  EXPECT_TRUE(contains(id.out, "worst-determined combinations")) << id.out;
+  const nlohmann::json summary = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_summary.json"));
+  EXPECT_EQ(summary["measurement"]["targets"], 1);
+  EXPECT_EQ(summary["parameters"], 39);
+  EXPECT_EQ(summary["weakest_combinations"].size(), 3u);
+  // The backlash is not in this model: the held-out residual is above the
+  // noise (8.66 µm per point) but far below the nominal model's.
+  const double before = summary["residual_before"]["test"]["rms_position_um"];
+  const double after = summary["residual"]["test"]["rms_position_um"];
+  EXPECT_LT(after, 0.5 * before);
+  const nlohmann::json model = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_model.json"));
+  ASSERT_TRUE(model.contains("instrument"));
+  EXPECT_EQ(model["instrument"].size(), 9u);  // reg_x .. reg_rz, t1x .. t1z
+  EXPECT_NEAR(model["instrument"][0]["value"].get<double>(), -900, 5.0);  // reg_x, mm
+
+  const ToolRun diag = run_tool("diagnose --robot \"" + robot_file + "\" --data \"" + meas +
+                                "\" --instrument-frame --quiet --json \"" + kDir + "/tracker_diag.json\"");
+  ASSERT_EQ(diag.code, 0) << diag.err;
+  const nlohmann::json d = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_diag.json"));
+  ASSERT_FALSE(d["accepted"].empty()) << diag.out;
+  EXPECT_EQ(d["accepted"][0], "backlash") << diag.out;
+
+  const ToolRun eff = run_tool("identify --robot \"" + robot_file + "\" --data \"" + meas +
+                               "\" --instrument-frame --effects backlash --out \"" + kDir + "/tracker_effects.json\"");
+  ASSERT_EQ(eff.code, 0) << eff.err;
+  const nlohmann::json em = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_effects.json"));
+  EXPECT_NEAR(em["effects"]["backlash"]["b2"].get<double>(), 0.02, 0.004);
+  EXPECT_TRUE(em.contains("instrument"));
+
+  // Refusals: each one line, naming what is wrong.
+  const ToolRun no_targets = run_tool("identify --robot stewart-seed001 --data \"" + kExamples +
+                                      "/seed001/table4_paper.csv\" --instrument-frame --out \"" + kDir + "/x.json\"");
+  EXPECT_EQ(no_targets.code, 1);
+  EXPECT_TRUE(contains(no_targets.err, "--instrument-frame needs target columns")) << no_targets.err;
+  const ToolRun bad_list = run_tool("simulate --robot \"" + robot_file + "\" --poses \"" + kExamples +
+                                    "/seed001/poses.csv\" --targets \"20,10\" --out \"" + kDir + "/x.csv\"");
+  EXPECT_EQ(bad_list.code, 1);
+  EXPECT_TRUE(contains(bad_list.err, "a target is x,y,z")) << bad_list.err;
+  const ToolRun hybrid = run_tool("simulate --robot hybrid-seed000 --poses \"" + kExamples +
+                                  "/seed001/poses.csv\" --targets \"0,0,10\" --out \"" + kDir + "/x.csv\"");
+  EXPECT_EQ(hybrid.code, 1);
+  EXPECT_TRUE(contains(hybrid.err, "6-UPS so far")) << hybrid.err;
+  const ToolRun without = run_tool("identify --robot stewart-seed001 --data \"" + meas + "\" --out \"" + kDir + "/x.json\"");
+  EXPECT_EQ(without.code, 1);
+  EXPECT_TRUE(contains(without.err, "add the key `targets`")) << without.err;
+}
+
+}  // namespace
