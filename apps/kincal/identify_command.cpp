@@ -149,6 +149,28 @@ int write_outputs(ki::OutputFiles& outputs, const IdentifyArgs& a, nlohmann::jso
   return 0;
 }
 
+// The residual tables of every identification: before (`nominal`: how the
+// nominal model is compared) and after; test rows were never fitted.
+void print_residuals(const IdentifyArgs& a, const ki::PoseErrorReport& before, const ki::PoseErrorReport& after,
+                     const std::string& nominal) {
+  kincal_app::warn_unevaluated(a.data, after);
+  const std::string at = after.target_points ? " at the targets" : "";
+  std::cout << "\nresiduals" << at << " before calibration (" << nominal << "):\n";
+  ki::print_pose_error_report(before, std::cout, false);
+  std::cout << "\nresiduals" << at
+            << " after calibration (measured - calibrated model; test rows were not used for fitting):\n";
+  ki::print_pose_error_report(after, std::cout, false);
+}
+
+// SUMMARY.json's first fields (empty when no SUMMARY.json is asked for).
+nlohmann::json summary_start(const IdentifyArgs& a, const ki::Robot& robot) {
+  nlohmann::json j;
+  if (a.json.empty()) return j;
+  j["robot"] = robot.name;
+  j["data"] = a.data;
+  return j;
+}
+
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
 // the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
 // or PCR.
@@ -247,19 +269,13 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   const ki::HybridCompensation comp = ki::hybrid_compensation_from_model(model);
   const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
   const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
-  kincal_app::warn_unevaluated(a.data, after);
-  std::cout << "\nresiduals before calibration (pose error from the gauge, measured - nominal model):\n";
-  ki::print_pose_error_report(before, std::cout, false);
-  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
-  ki::print_pose_error_report(after, std::cout, false);
+  print_residuals(a, before, after, "pose error from the gauge, measured - nominal model");
   kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
-  nlohmann::json summary;
+  nlohmann::json summary = summary_start(a, robot);
   if (!a.json.empty()) {
     nlohmann::json& j = summary;
-    j["robot"] = robot.name;
-    j["data"] = a.data;
     j["estimator"] = base_line.empty() ? estimator : model.estimator;
     j["estimator_settings"] = base_line.empty() ? ki::estimator_settings(est, eo) : model.settings;
     if (!base_line.empty()) {
@@ -334,18 +350,11 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
   const ki::PoseErrorReport before = ki::stewart_target_residuals(robot, robot, nominal_registration, robot.targets, data);
   const ki::PoseErrorReport after =
       ki::stewart_target_residuals(robot, ki::calibrated_robot(model), used.registration, used.targets, data);
-  kincal_app::warn_unevaluated(a.data, after);
-  std::cout << "\nresiduals at the targets before calibration (measured - nominal model"
-            << (a.instrument_frame ? " laid onto them by a rigid fit" : "") << "):\n";
-  ki::print_pose_error_report(before, std::cout, false);
-  std::cout << "\nresiduals at the targets after calibration (measured - calibrated model; test rows were not used "
-               "for fitting):\n";
-  ki::print_pose_error_report(after, std::cout, false);
-  nlohmann::json summary;
+  print_residuals(a, before, after,
+                  a.instrument_frame ? "measured - nominal model laid onto them by a rigid fit" : "measured - nominal model");
+  nlohmann::json summary = summary_start(a, robot);
   if (!a.json.empty()) {
     nlohmann::json& j = summary;
-    j["robot"] = robot.name;
-    j["data"] = a.data;
     j["estimator"] = "ols";
     j["measurement"] = {{"targets", data.target_columns()}, {"instrument_frame", a.instrument_frame}};
     j["rank"] = used.rank;
@@ -426,16 +435,10 @@ int run_identify(const IdentifyArgs& a) {
   outputs.add(a.out, ki::model_to_json(model));
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);
   const ki::PoseErrorReport after = ki::stewart_residuals(robot, ki::calibrated_robot(model), data);
-  kincal_app::warn_unevaluated(a.data, after);
-  std::cout << "\nresiduals before calibration (measured - nominal model):\n";
-  ki::print_pose_error_report(before, std::cout, false);
-  std::cout << "\nresiduals after calibration (measured - calibrated model; test rows were not used for fitting):\n";
-  ki::print_pose_error_report(after, std::cout, false);
-  nlohmann::json summary;
+  print_residuals(a, before, after, "measured - nominal model");
+  nlohmann::json summary = summary_start(a, robot);
   if (!a.json.empty()) {
     nlohmann::json& j = summary;
-    j["robot"] = robot.name;
-    j["data"] = a.data;
     j["estimator"] = estimator;
     j["estimator_settings"] = ki::estimator_settings(used.fit, used.estimator);
     j["rank"] = used.rank;

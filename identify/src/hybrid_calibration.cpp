@@ -492,11 +492,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   }
   if (options.test_nodes) {
     const OutlierReport o = detect_outliers(fp);
-    for (const NodeStatistic& st : o.nodes) {
-      const Node& n = nodes[static_cast<std::size_t>(st.node)];
-      out.node_tests.push_back({n.id, n.line, st.f, st.p_value, st.testable, st.outlying});
-      if (st.outlying) out.outliers.push_back(n.id);
-    }
+    add_node_tests(o, nodes, out.node_tests, out.outliers);
     out.outlier_p_threshold = o.p_threshold;
     out.outlier_report = o;
   }
@@ -518,10 +514,7 @@ HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable&
       data, all, [](const HybridCalibration& c) -> const LinearProblem& { return c.fine_problem; },
       [](const HybridCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
       [&](const PoseTable& rest) { return calibrate_hybrid(nominal, rest, o); }, so);
-  out.removed = std::move(s.screen.flagged);
-  out.systematic = s.screen.systematic;
-  out.rest = std::move(s.rest);
-  return out;
+  return outlier_search_of(std::move(s));
 }
 
 IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const HybridCalibration& cal,

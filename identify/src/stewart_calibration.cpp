@@ -248,11 +248,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   // row): deleted-node F test at the solution, Bonferroni over the nodes.
   // Reported, never silently excluded.
   const OutlierReport outliers = detect_outliers(*last_design, last_problem);
-  for (const NodeStatistic& st : outliers.nodes) {
-    const Node& node = nodes[std::size_t(st.node)];
-    out.node_tests.push_back({node.id, node.line, st.f, st.p_value, st.testable, st.outlying});
-    if (st.outlying) out.outliers.push_back(node.id);
-  }
+  add_node_tests(outliers, nodes, out.node_tests, out.outliers);
   out.outlier_p_threshold = outliers.p_threshold;
   out.outlier_report = outliers;
   out.final_problem = std::move(last_problem);
@@ -267,11 +263,7 @@ StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTabl
       data, all, [](const StewartCalibration& c) -> const LinearProblem& { return c.final_problem; },
       [](const StewartCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
       [&](const PoseTable& rest) { return calibrate_stewart(nominal, rest, options); }, so);
-  StewartOutlierSearch out;
-  out.removed = std::move(s.screen.flagged);
-  out.systematic = s.screen.systematic;
-  out.rest = std::move(s.rest);
-  return out;
+  return outlier_search_of(std::move(s));
 }
 
 PoseErrorReport stewart_residuals(const Robot& nominal_robot, const Robot& calibrated, const PoseTable& data) {

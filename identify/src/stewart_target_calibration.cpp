@@ -314,11 +314,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
   problem.row_node.resize(std::size_t(n));
   for (Eigen::Index r = 0; r < n; ++r) problem.row_node[std::size_t(r)] = r / rows;
   const OutlierReport outliers = detect_outliers(problem);
-  for (const NodeStatistic& st : outliers.nodes) {
-    const TargetNode& node = nodes[std::size_t(st.node)];
-    out.node_tests.push_back({node.id, node.line, st.f, st.p_value, st.testable, st.outlying});
-    if (st.outlying) out.outliers.push_back(node.id);
-  }
+  add_node_tests(outliers, nodes, out.node_tests, out.outliers);
   out.outlier_p_threshold = outliers.p_threshold;
   out.outlier_report = outliers;
   out.final_problem = std::move(problem);
@@ -357,7 +353,7 @@ StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, c
       data, all, [](const StewartTargetCalibration& c) -> const LinearProblem& { return c.final_problem; },
       [](const StewartTargetCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
       [&](const PoseTable& rest) { return calibrate_stewart_targets(nominal, rest, options); }, so);
-  return {std::move(s.screen.flagged), std::move(s.rest), s.screen.systematic};
+  return outlier_search_of(std::move(s));
 }
 
 PoseErrorReport stewart_target_residuals(const Robot& nominal_in, const Robot& robot_in,

@@ -23,6 +23,7 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/outliers.hpp"
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -181,11 +182,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
 // flagged after a tenth of the cal nodes was set aside, so the misfit is not
 // a few bad nodes but the model (an unmodelled effect) or noise-free data
 // (the F test assumes noise), and excluding nodes would hide it.
-struct HybridOutlierSearch {
-  std::vector<NodeTest> removed;
-  HybridCalibration rest;
-  bool systematic = false;
-};
+using HybridOutlierSearch = OutlierSearch<HybridCalibration>;
 HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data, const HybridCalibration& all,
                                           const HybridCalibrationOptions& options = {});
 

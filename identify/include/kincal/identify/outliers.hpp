@@ -69,6 +69,32 @@ ScreenedFit<Fit> screen_and_refit(const PoseTable& data, const Fit& all, Problem
   return out;
 }
 
+// What a family's outlier search returns (stewart_outlier_search,
+// hybrid_outlier_search, stewart_target_outlier_search): the flagged nodes in
+// the order found (each with its statistic at that step), and `rest`, the fit
+// without them — or the fit of all nodes when none was flagged or the misfit
+// is systematic.
+template <class Fit> struct OutlierSearch {
+  std::vector<NodeTest> removed;
+  Fit rest;
+  bool systematic = false;
+};
+template <class Fit> OutlierSearch<Fit> outlier_search_of(ScreenedFit<Fit> s) {
+  return {std::move(s.screen.flagged), std::move(s.rest), s.screen.systematic};
+}
+
+// A fit's node tests from its report at the solution: node k of the report is
+// nodes[k] (its .id and .line); the ids of the flagged ones go to `outlying`.
+template <class Node>
+void add_node_tests(const OutlierReport& report, const std::vector<Node>& nodes, std::vector<NodeTest>& tests,
+                    std::vector<std::string>& outlying) {
+  for (const NodeStatistic& st : report.nodes) {
+    const Node& n = nodes[std::size_t(st.node)];
+    tests.push_back({n.id, n.line, st.f, st.p_value, st.testable, st.outlying});
+    if (st.outlying) outlying.push_back(n.id);
+  }
+}
+
 // The policy every command follows: leave the flagged rows out unless the
 // user keeps them or the misfit is systematic.
 inline bool leave_out(const OutlierScreen& screen, bool keep) {

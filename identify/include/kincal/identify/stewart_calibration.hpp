@@ -14,6 +14,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/outliers.hpp"
 #include "kincal/identify/pose_errors.hpp"
 
 namespace kincal::identify {
@@ -87,11 +88,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
 // `removed` in the order found (each with its test statistic at that step);
 // `rest` is the calibration refitted without them — or `all` itself when
 // none was flagged or the misfit is systematic.
-struct StewartOutlierSearch {
-  std::vector<NodeTest> removed;
-  StewartCalibration rest;
-  bool systematic = false;
-};
+using StewartOutlierSearch = OutlierSearch<StewartCalibration>;
 StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
                                             const StewartCalibration& all,
                                             const StewartCalibrationOptions& options = {});

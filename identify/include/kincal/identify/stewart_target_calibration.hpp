@@ -26,6 +26,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/model.hpp"
+#include "kincal/identify/outliers.hpp"
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/robot.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
@@ -99,11 +100,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
 Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data);
 
 // The outlier screen of identify/outliers.hpp around it.
-struct StewartTargetOutlierSearch {
-  std::vector<NodeTest> removed;
-  StewartTargetCalibration rest;
-  bool systematic = false;
-};
+using StewartTargetOutlierSearch = OutlierSearch<StewartTargetCalibration>;
 StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, const PoseTable& data,
                                                          const StewartTargetCalibration& all,
                                                          const StewartTargetOptions& options = {});
