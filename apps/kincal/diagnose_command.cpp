@@ -41,7 +41,7 @@ CLI::App* add_diagnose_command(CLI::App& app, DiagnoseArgs& a) {
               "left out, unless the misfit is systematic)");
   d->add_flag("--quiet", a.quiet, "no progress lines on stderr");
   d->add_flag("--instrument-frame", a.instrument_frame,
-              "6-UPS with target columns t1x..: the targets are measured in the instrument's own frame; its "
+              "target columns t1x.. (the robot's `targets`): measured in the instrument's own frame; its "
               "registration is identified with the base model (docs/identify.md)");
   return d;
 }

@@ -37,7 +37,7 @@
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
-#include "kincal/identify/stewart_target_calibration.hpp"
+#include "kincal/identify/target_calibration.hpp"
 #include "kincal/identify/table_writer.hpp"
 #include "kincal/identify/version.hpp"
 #include "commands.hpp"
@@ -300,22 +300,26 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
-// Laser-tracker targets on a 6-UPS (stewart_target_calibration.hpp): seed
+// Laser-tracker targets on a 6-UPS (target_calibration.hpp): seed
 // 001's 42 errors with the targets' positions and, in the instrument's
 // frame, its registration; the frame convention closes what target
 // positions cannot fix.
 int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
   if (!a.estimator.empty() && a.estimator != "ols")
     throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
-  const ki::StewartTargetOptions options;
-  std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001 from "
+  const ki::TargetCalibrationOptions options;
+  const int family_size = robot.is_stewart() ? 42 : 150;
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " ("
+            << (robot.is_stewart() ? "42-parameter model of seed 001" : "150 source errors of seed 000") << " from "
             << data.target_columns() << " target(s) measured in the "
             << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
-  const ki::StewartTargetCalibration c = ki::calibrate_stewart_targets(robot, data, options);
-  std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (42 joint errors, "
-            << 3 * c.targets.size() << " target coordinates" << (a.instrument_frame ? ", 6 registration" : "")
-            << ", less the frame convention's " << (a.instrument_frame ? 12 : 6) << "), rank " << c.rank
-            << ", condition number (column-scaled) " << c.condition_number << "\n";
+  const ki::TargetCalibration c = ki::calibrate_targets(robot, data, options);
+  const int held = family_size + 3 * int(c.targets.size()) + (a.instrument_frame ? 6 : 0) - c.free_parameters;
+  std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (" << family_size
+            << " errors, " << 3 * c.targets.size() << " target coordinates"
+            << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " the frame convention fixes: "
+            << c.convention << "), rank " << c.rank << ", condition number (column-scaled) " << c.condition_number
+            << "\n";
   std::cout << "  iteration   rms target residual (um)\n";
   for (const ki::StewartIteration& h : c.history) {
     char line[96];
@@ -329,27 +333,28 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
       std::cout << (i ? " + " : " ") << w.terms[i].second << "*" << w.terms[i].first;
     std::cout << "\n";
   }
-  const ki::StewartTargetOutlierSearch search = ki::stewart_target_outlier_search(robot, data, c, options);
+  const ki::TargetOutlierSearch search = ki::target_outlier_search(robot, data, c, options);
   const ki::OutlierScreen screen = ki::screen_of(search, c.outlier_p_threshold, a.keep_outliers);
   kincal_app::print_outliers(a.data, screen, c.nodes, a.keep_outliers);
-  const ki::StewartTargetCalibration& used = screen.excluded ? search.rest : c;
-  const ki::CalibrationModel model = ki::stewart_target_model(robot, used, a.data);
+  const ki::TargetCalibration& used = screen.excluded ? search.rest : c;
+  const ki::CalibrationModel model = ki::target_model(robot, used, a.data);
   if (a.instrument_frame) {
     const kincal::Vec6<double> reg = used.registration.to_xyz_rpy();
     std::cout << "  registration (base frame in the instrument frame): x " << reg(0) << ", y " << reg(1) << ", z "
               << reg(2) << " mm, rx " << reg(3) << ", ry " << reg(4) << ", rz " << reg(5) << " rad\n";
   }
   for (std::size_t k = 0; k < used.targets.size(); ++k)
-    std::cout << "  target t" << k + 1 << " on the platform: " << used.targets[k].transpose() << " mm (sd "
+    std::cout << "  target t" << k + 1 << " on the " << (robot.is_stewart() ? "platform" : "tool") << ": "
+              << used.targets[k].transpose() << " mm (sd "
               << 1e3 * used.target_standard_error[k].transpose() << " um)\n";
   kincal_app::warn_correction_need(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   const kincal::Pose<double> nominal_registration =
       a.instrument_frame ? ki::nominal_registration(robot, data) : kincal::Pose<double>{};
-  const ki::PoseErrorReport before = ki::stewart_target_residuals(robot, robot, nominal_registration, robot.targets, data);
-  const ki::PoseErrorReport after =
-      ki::stewart_target_residuals(robot, ki::calibrated_robot(model), used.registration, used.targets, data);
+  const ki::PoseErrorReport before =
+      ki::target_residuals(robot, Eigen::VectorXd::Zero(used.errors.size()), nominal_registration, robot.targets, data);
+  const ki::PoseErrorReport after = ki::target_residuals(robot, used.errors, used.registration, used.targets, data);
   print_residuals(a, before, after,
                   a.instrument_frame ? "measured - nominal model laid onto them by a rigid fit" : "measured - nominal model");
   nlohmann::json summary = summary_start(a, robot);
@@ -371,8 +376,11 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     }
     j["weakest_combinations"] = weak;
     nlohmann::json inst = nlohmann::json::object();
-    for (const ki::ModelParameter& p : model.instrument)
+    for (const ki::ModelParameter& p : model.instrument) {
       inst[p.name] = {{"value", p.value}, {"standard_error", p.standard_error}};
+      if (p.name[0] == 't')  // the target's offset from the description's position
+        inst[p.name]["offset"] = p.value - robot.targets[std::size_t(p.name[1] - '1')](p.name[2] - 'x');
+    }
     j["instrument"] = inst;
   }
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
@@ -397,7 +405,11 @@ int run_identify(const IdentifyArgs& a) {
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
                                                  k, a.keep_outliers, a.instrument_frame);
   }
-  if (robot.is_hybrid()) return run_identify_hybrid(a, robot, kincal_app::read_measurements(robot, a.data, a.instrument_frame));
+  if (robot.is_hybrid()) {
+    const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
+    if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
+    return run_identify_hybrid(a, robot, data);
+  }
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
   if (estimator == "liu")
     throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "

@@ -147,9 +147,6 @@ ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::s
   options.warn = warn;
   ki::PoseTable data = ki::read_pose_table(path, options);
   if (instrument_frame) {
-    if (robot.is_hybrid())
-      throw ki::InputError("--instrument-frame: the hybrid's gauge is measured in the workpiece frame; targets in an "
-                           "instrument's frame are implemented for the 6-UPS so far");
     if (!data.has_targets)
       throw ki::InputError(path, 1, 0, "--instrument-frame needs target columns t1x.. (laser-tracker targets)");
     data.in_instrument_frame = true;
@@ -392,8 +389,9 @@ int run(int argc, char** argv) {
                        "NAME:PARAM=VALUE, a physical effect of the actual machine (repeatable; e.g. scale:s1=1e-4, "
                        "thermal:c=1.2e-5; 'kincal effects' lists them)");
   simulate->add_option("--targets", sim.targets,
-                       "6-UPS: measure laser-tracker targets, not poses: 'robot' (the description's `targets`) or "
-                       "the true positions on the platform 'x,y,z[;x,y,z[;x,y,z]]', mm (columns t1x..)");
+                       "measure laser-tracker targets instead of poses (6-UPS) or the gauge (hybrid): 'robot' (the "
+                       "description's `targets`) or the true positions on the platform / tool 'x,y,z[;x,y,z[;x,y,z]]', "
+                       "mm (columns t1x..)");
   simulate->add_option("--instrument-frame", sim.instrument_frame,
                        "with --targets: the robot base frame's pose in the instrument's frame, 'x,y,z,rx,ry,rz' (mm, "
                        "rad); the targets are written in the instrument frame");
@@ -460,7 +458,7 @@ int run(int argc, char** argv) {
       ->check(kincal_app::decimal(0.0, 1.0));
   identify->add_option("--json", ident.json, "SUMMARY.json to write");
   identify->add_flag("--instrument-frame", ident.instrument_frame,
-                     "6-UPS with target columns t1x..: the targets are measured in the instrument's own frame; its "
+                     "target columns t1x.. (the robot's `targets`): measured in the instrument's own frame; its "
                      "registration is identified with the model (docs/identify.md)");
   identify->add_flag("--keep-outliers", ident.keep_outliers,
                      "fit every node, also those found inconsistent with the others (default: they are listed and "

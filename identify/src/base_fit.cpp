@@ -11,7 +11,7 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
-#include "kincal/identify/stewart_target_calibration.hpp"
+#include "kincal/identify/target_calibration.hpp"
 
 namespace kincal::identify::detail {
 
@@ -33,41 +33,44 @@ Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
   return row.q ? Vec6<double>(row.q->head<6>()) : node.q;
 }
 
-// Laser-tracker targets (stewart_target_calibration.hpp): per node the target
-// residuals, their map M and the design rows in the frame convention's
+// Laser-tracker targets (target_calibration.hpp), either family: per node the
+// target residuals, their map M and the design rows in the convention's
 // coordinates.
-BaseModel stewart_target_base(const Robot& robot, const PoseTable& data,
-                              const std::vector<std::optional<EffectNode>>& en) {
-  const StewartTargetCalibration cal = calibrate_stewart_targets(robot, data);
+BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
+  const TargetCalibration cal = calibrate_targets(robot, data);
   BaseModel base;
-  base.description = "seed 001 42-parameter model from " + std::to_string(data.target_columns()) + " target(s)" +
+  base.description = std::string(robot.is_stewart() ? "seed 001 42-parameter model" : "seed 000 source-error model") +
+                     " from " + std::to_string(data.target_columns()) + " target(s)" +
                      (data.in_instrument_frame ? " in the instrument's frame (registration identified)" : "") +
                      " (Gauss-Newton, " + std::to_string(cal.history.size()) + " evaluations)";
   base.parameters = cal.free_parameters;
+  std::vector<std::size_t> at;
+  std::vector<TargetRowInput> inputs;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
     const PoseRow& row = data.rows[k];
     if (!row.targets || !usable(row) || !en[k]) continue;
-    TargetRowModel at;
-    if (!stewart_target_row(robot, cal, joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), *row.targets,
-                            at))
-      continue;
+    at.push_back(k);
+    inputs.push_back({joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), *row.targets});
+  }
+  std::vector<std::optional<TargetRowModel>> models = target_rows(robot, cal, inputs);
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    if (!models[i]) continue;
     NodeData n;
-    n.row = k;
-    n.test = row.role == Role::Test;
-    n.r = std::move(at.residual);
-    n.M = std::move(at.M);
-    n.H = std::move(at.H);
-    n.effect = *en[k];
+    n.row = at[i];
+    n.test = data.rows[at[i]].role == Role::Test;
+    n.r = std::move(models[i]->residual);
+    n.M = std::move(models[i]->M);
+    n.H = std::move(models[i]->H);
+    n.effect = *en[at[i]];
     base.nodes.push_back(std::move(n));
   }
-  base.model = stewart_target_model(robot, cal, data.file);
+  base.model = target_model(robot, cal, data.file);
   return base;
 }
 
 BaseModel stewart_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
                        const std::string& estimator) {
   (void)estimator;  // seed 001's model is fitted by OLS
-  if (uses_target_model(robot, data)) return stewart_target_base(robot, data, en);
   const StewartCalibration cal = calibrate_stewart(robot, data);
   const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits
   BaseModel base;
@@ -336,6 +339,7 @@ BaseModel hybrid_base(const Robot& robot, const PoseTable& data, const std::vect
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
                    const std::string& estimator, bool finish_least_squares, double ridge_k) {
+  if (uses_target_model(robot, fit_data)) return target_base(robot, fit_data, nodes);
   return robot.is_stewart() ? stewart_base(robot, fit_data, nodes, estimator)
                             : hybrid_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
 }

@@ -11,6 +11,7 @@
 // H); Holm's step-down procedure controls the family-wise error over the
 // candidates; the held-out (test) rows never enter a fit and give the gain.
 #include "kincal/identify/diagnosis.hpp"
+#include "kincal/identify/target_calibration.hpp"
 
 #include <Eigen/QR>
 #include <algorithm>
@@ -382,7 +383,7 @@ void DiagnosisRun::check_inputs() {
     throw InputError(data.file, 1, 0,
                      "needs the measured pose columns mx,my,mz,mrx,mry,mrz or target positions t1x.. to diagnose a "
                      "6-UPS");
-  if (robot.is_hybrid() && data.target_columns() != 3)
+  if (robot.is_hybrid() && data.target_columns() != 3 && !uses_target_model(robot, data))
     throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
   if (data.has_layer) {

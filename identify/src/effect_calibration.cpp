@@ -1,5 +1,5 @@
 #include "kincal/identify/effect_calibration.hpp"
-#include "kincal/identify/stewart_target_calibration.hpp"
+#include "kincal/identify/target_calibration.hpp"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -318,7 +318,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   std::optional<detail::HybridBaseFit> hybrid;
   const bool choose_k = options.estimator != "ols" && !(options.ridge_k > 0);
   auto fit = [&]() {
-    if (!robot.is_hybrid()) {
+    if (!robot.is_hybrid() || uses_target_model(robot, data)) {  // target data: the target fit, either family
       detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep);
       rep.base = uses_target_model(robot, data) ? b.description : "seed 001's iterated least squares (OLS)";
       return b;

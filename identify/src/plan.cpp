@@ -188,8 +188,9 @@ class DesignRows {
       rows_ = 3 * Index(robot.targets.size());
       measure_ = std::to_string(robot.targets.size()) + " target position" + (robot.targets.size() > 1 ? "s" : "") +
                  " (the robot's `targets`)";
-      notes.push_back("kincal identify does not read target positions other than the hybrid's seed 000 gauge yet; "
-                      "this plan's numbers are for such a measurement");
+      notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "
+                      "it); with identify --instrument-frame the tracker's registration is identified as well, and "
+                      "the frames are then the weakest part (docs/identify.md \"Laser-tracker targets\")");
     } else if (robot.is_hybrid()) {
       rows_ = 9;
       gauge_ = true;

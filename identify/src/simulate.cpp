@@ -97,15 +97,12 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
 
   const bool tracker = !options.targets.empty();
-  if (tracker && !nominal.is_stewart())
-    throw InputError("--targets: the hybrid is measured by seed 000's gauge (gauge_radius); other targets are "
-                     "simulated for the 6-UPS so far");
   if (options.targets.size() > 3) throw InputError("--targets: at most three targets (t1..t3)");
   if (options.instrument_frame && !tracker)
     throw InputError("--instrument-frame applies to target measurements (--targets)");
   PoseTable out = poses;
   out.has_measured = !tracker;
-  out.target_count = nominal.is_hybrid() ? 3 : int(options.targets.size());
+  out.target_count = tracker ? int(options.targets.size()) : nominal.is_hybrid() ? 3 : 0;
   out.has_targets = out.target_count > 0;
   out.has_status = false;
   out.ignored_columns.clear();
@@ -151,7 +148,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     for (int k = 0; k < 3; ++k) m(k) += noise(options.noise_mm);
     for (int k = 3; k < 6; ++k) m(k) += noise(options.noise_rad);
     row.measured = m;
-    if (nominal.is_hybrid()) {
+    if (nominal.is_hybrid()) {  // seed 000's gauge
       Eigen::Matrix<double, 3, 3> t = gauge_targets(actual.hybrid(), actual.gauge_radius, r.pose);
       for (int k = 0; k < 9; ++k) t.data()[k] += noise(options.noise_mm);
       row.targets = t;

@@ -26,9 +26,10 @@ struct SimulateOptions {
   // approach directions and static load), thermal scales the reached pose
   // about the base origin; needs a temp column when thermal is non-zero.
   EffectValues effects;
-  // 6-UPS: measure laser-tracker targets at these positions on the platform
-  // (platform frame, mm; 1–3 of them: the machine's true targets, which may
-  // differ from the description's `targets`) instead of full poses.
+  // Measure laser-tracker targets at these positions on the platform (6-UPS,
+  // platform frame) or the tool (hybrid, tool frame), mm; 1–3 of them: the
+  // machine's true targets, which may differ from the description's
+  // `targets`. Instead of full poses (6-UPS) or the gauge (hybrid).
   std::vector<Vec3<double>> targets;
   // With `targets`: the pose of the robot's base frame in the instrument's
   // frame (the registration); the targets are written in the instrument frame.

@@ -1,26 +1,31 @@
-#include "kincal/identify/stewart_target_calibration.hpp"
+#include "kincal/identify/target_calibration.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <string>
 
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/outliers.hpp"
-#include "kincal/identify/parameters.hpp"
 #include "kincal/identify/target_measurement.hpp"
 #include "least_squares_step.hpp"
+#include "target_family.hpp"
 
 namespace kincal::identify {
 
 namespace {
 
-constexpr int kJointErrors = kStewartParameterCount;  // 42: per leg dXB dYB dZB dl dXP dYP dZP
-// A rotation's share in a weak combination, and the registration's in the
-// rank test: 1 rad ≙ 1 m, the size of the machines this is for.
+using detail::NodeGuess;
+using detail::TargetFamily;
+using detail::TargetLayout;
+
+// A rotation's share in a weak combination: 1 rad ≙ 1 m, the size of the
+// machines this is for.
 constexpr double kRadianMm = 1000.0;
 
 bool usable(const PoseRow& r) { return r.status.empty() || r.status == "ok"; }
@@ -40,27 +45,30 @@ struct TargetNode {
   std::string id;
   Vec6<double> q;
   TargetPoints measured;
-  Pose<double> pose;  // the model's pose at q: FK start of the next evaluation
+  NodeGuess guess;    // where the model's pose was last found
+  Pose<double> pose;  // the model's pose at q
 };
 
 void require_targets(const Robot& nominal, const PoseTable& data) {
-  if (!nominal.is_stewart()) throw InputError("target measurement is implemented for the 6-UPS (stewart-6ups) so far");
   if (nominal.targets.empty())
     throw InputError(data.file, 1, 0,
                      "the table has target columns t1x..; the robot description needs the targets' nominal positions "
-                     "on the platform: add the key `targets` (docs/formats.md)");
+                     "on the " + std::string(nominal.is_stewart() ? "platform" : "tool") +
+                         ": add the key `targets` (docs/formats.md)");
   if (int(nominal.targets.size()) != data.target_columns())
     throw InputError(data.file, 1, 0,
                      "the table measures " + std::to_string(data.target_columns()) + " target(s), the robot description's "
                          "`targets` name " + std::to_string(nominal.targets.size()));
 }
 
-std::vector<TargetNode> target_nodes(const Robot& open, const PoseTable& data, int free_parameters) {
+std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& family, const PoseTable& data,
+                                     int free_parameters) {
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
     if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(r.commanded);
     TargetNode n{r.line, r.id, Vec6<double>::Zero(), r.targets->leftCols(data.target_columns()),
-                 Pose<double>::from_xyz_rpy(r.commanded)};
+                 family.start(commanded), commanded};
     if (const Status s = row_commands(open, r, n.q); s != Status::Ok)
       throw InputError(data.file, r.line, 0,
                        "row '" + r.id + "': nominal IK of the commanded pose failed (" + to_string(s) +
@@ -74,8 +82,19 @@ std::vector<TargetNode> target_nodes(const Robot& open, const PoseTable& data, i
                      "only " + std::to_string(nodes.size()) + " calibration nodes with target positions; " +
                          std::to_string(free_parameters) + " free parameters measured by " +
                          std::to_string(rows_per_node) + " coordinates per node need at least " +
-                         std::to_string(needed) + " (and poses that also turn the platform)");
+                         std::to_string(needed) + " (and poses that also turn the " +
+                         (open.is_stewart() ? "platform" : "tool") + ")");
   return nodes;
+}
+
+// The nodes' poses on the nominal machine.
+void nominal_poses(const TargetFamily& family, const PoseTable& data, std::vector<TargetNode>& nodes) {
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(family.size());
+  for (TargetNode& node : nodes)
+    if (!family.pose(zero, node.q, node.guess, node.pose))
+      throw InputError(data.file, node.line, 0,
+                       "row '" + node.id + "': FK of the nominal machine failed from the commanded pose; check the "
+                       "robot description and the row");
 }
 
 // The rigid fit of the targets at the nodes' poses onto the measured ones.
@@ -89,34 +108,15 @@ Pose<double> registration_of(const std::vector<TargetNode>& nodes, const std::ve
   return rigid_fit(from, to);
 }
 
-// The nodes with the nominal machine's poses at their commands.
-void nominal_poses(const Robot& open, const PoseTable& data, std::vector<TargetNode>& nodes) {
-  for (TargetNode& node : nodes)
-    if (const Status s = stewart_fk(open.stewart(), node.q, node.pose, node.pose).status; s != Status::Ok)
-      throw InputError(data.file, node.line, 0,
-                       "row '" + node.id + "': FK of the nominal machine failed (" + to_string(s) +
-                           ") from the commanded pose; check the robot description and the row");
-}
-
-// Column layout of the full parameter vector x: the 42 joint errors, then
-// the registration twist (instrument frame only), then 3 per target.
-struct Layout {
-  int targets = 0;
-  bool registration = false;
-  int registration_at() const { return kJointErrors; }
-  int targets_at() const { return kJointErrors + (registration ? 6 : 0); }
-  int size() const { return targets_at() + 3 * targets; }
-};
-
 // The design rows of one pose over the full x (3k × layout.size()): the
-// joint errors through the measurement map (H = M·B, seed 000 Eq. (10) with
-// the targets' M), then the instrument's own columns.
-Eigen::MatrixXd full_design_rows(const StewartGeometry<double>& g, const Pose<double>& registration,
-                                 const std::vector<Vec3<double>>& targets, const Pose<double>& pose,
-                                 const Layout& layout) {
+// family's errors through the measurement map (H = M·B, seed 000 Eq. (10)
+// with the targets' M), then the instrument's own columns.
+Eigen::MatrixXd full_design_rows(const TargetFamily& family, const Eigen::VectorXd& errors,
+                                 const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
+                                 const Pose<double>& pose, const TargetLayout& layout) {
   const Eigen::Index rows = 3 * layout.targets;
   Eigen::MatrixXd X(rows, layout.size());
-  X.leftCols(kJointErrors) = target_map(registration, pose, targets) * stewart_error_jacobian(g, pose);
+  X.leftCols(layout.family) = target_map(registration, pose, targets) * family.twist_columns(errors, pose);
   const Eigen::MatrixXd inst = instrument_columns(registration, pose, targets);
   if (layout.registration) X.middleCols(layout.registration_at(), 6) = inst.leftCols<6>();
   X.middleCols(layout.targets_at(), 3 * layout.targets) = inst.rightCols(3 * layout.targets);
@@ -124,21 +124,23 @@ Eigen::MatrixXd full_design_rows(const StewartGeometry<double>& g, const Pose<do
 }
 
 // The convention's null space N (x = N·φ keeps every convention row zero).
-Eigen::MatrixXd convention_basis(const StewartGeometry<double>& g, const Layout& layout) {
-  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(layout.registration ? 12 : 6, layout.size());
-  const Eigen::Matrix<double, 6, Eigen::Dynamic> platform = rigid_motion_rows(g.platform);
-  const Eigen::Matrix<double, 6, Eigen::Dynamic> base = rigid_motion_rows(g.base);
-  for (int i = 0; i < 6; ++i) {
-    C.block<6, 3>(0, 7 * i + 4) = platform.middleCols<3>(3 * i);
-    if (layout.registration) C.block<6, 3>(6, 7 * i) = base.middleCols<3>(3 * i);
+Eigen::MatrixXd null_space(const Eigen::MatrixXd& C, Eigen::Index columns) {
+  if (C.rows() == 0) return Eigen::MatrixXd::Identity(columns, columns);
+  // Rows that each hold one column at zero (the hybrid's selection): the
+  // other columns themselves, so φ is those parameters, unmixed.
+  if (((C.array() != 0).rowwise().count() == 1).all()) {
+    const Eigen::VectorXd held = C.cwiseAbs().colwise().sum().transpose();
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(columns, columns - (held.array() > 0).count());
+    for (Eigen::Index j = 0, c = 0; j < columns; ++j)
+      if (held(j) == 0) N(j, c++) = 1.0;
+    return N;
   }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(C, Eigen::ComputeFullV);
-  return svd.matrixV().rightCols(layout.size() - C.rows());
+  return svd.matrixV().rightCols(columns - svd.rank());
 }
 
-std::vector<std::string> full_names(const Robot& nominal, const Layout& layout) {
-  std::vector<std::string> names = parameter_names(nominal);
-  names.resize(kJointErrors);
+std::vector<std::string> full_names(const TargetFamily& family, const TargetLayout& layout) {
+  std::vector<std::string> names = family.names();
   if (layout.registration)
     for (const char* c : {"reg_x", "reg_y", "reg_z", "reg_rx", "reg_ry", "reg_rz"}) names.push_back(c);
   for (int k = 1; k <= layout.targets; ++k)
@@ -147,7 +149,7 @@ std::vector<std::string> full_names(const Robot& nominal, const Layout& layout) 
 }
 
 // Rotational components of x (the registration's rotation) in mm at 1 m.
-Eigen::VectorXd unit_weights(const Layout& layout) {
+Eigen::VectorXd unit_weights(const TargetLayout& layout) {
   Eigen::VectorXd w = Eigen::VectorXd::Ones(layout.size());
   if (layout.registration) w.segment<3>(layout.registration_at() + 3).setConstant(kRadianMm);
   return w;
@@ -186,49 +188,67 @@ std::string describe(const WeakCombination& w) {
 
 }  // namespace
 
-StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const PoseTable& data,
-                                                   const StewartTargetOptions& options) {
+bool uses_target_model(const Robot& robot, const PoseTable& data) {
+  if (!data.has_targets) return false;
+  if (data.in_instrument_frame) return true;
+  return robot.is_stewart() ? !data.has_measured : !robot.targets.empty();
+}
+
+TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data, const TargetCalibrationOptions& options) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);  // measured rows: the machine was there (joint_limits.hpp)
-  const Layout layout{data.target_columns(), data.in_instrument_frame};
-  const Eigen::MatrixXd N = convention_basis(nominal.stewart(), layout);
-  const int p = int(N.cols());
-  std::vector<TargetNode> nodes = target_nodes(open, data, p);
+  const std::unique_ptr<TargetFamily> family = detail::target_family(open);
+  const TargetLayout layout{family->size(), data.target_columns(), data.in_instrument_frame};
   const Eigen::Index rows = 3 * layout.targets;
-  const Eigen::Index n = rows * Eigen::Index(nodes.size());
-  const std::vector<std::string> names = full_names(nominal, layout);
 
+  TargetCalibration out;
+  out.instrument_frame = data.in_instrument_frame;
+  out.targets = nominal.targets;
+  out.names = family->names();
+  out.convention = family->convention();
   // The nominal machine's poses, then (in the instrument frame) the
   // registration that best lays the nominal targets onto the measured ones.
-  StewartTargetCalibration out;
-  out.instrument_frame = data.in_instrument_frame;
-  out.nodes = nodes.size();
+  // The node count is checked against the parameters before the convention
+  // (which needs the nodes' design) and again after it.
+  std::vector<TargetNode> nodes = target_nodes(open, *family, data, 0);
+  nominal_poses(*family, data, nodes);
+  if (out.instrument_frame) out.registration = registration_of(nodes, out.targets);
+  const Eigen::Index n = rows * Eigen::Index(nodes.size());
+  Eigen::VectorXd errors = Eigen::VectorXd::Zero(layout.family);
+  Eigen::MatrixXd X(n, layout.size());
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+    X.middleRows(rows * Eigen::Index(k), rows) =
+        full_design_rows(*family, errors, out.registration, out.targets, nodes[k].pose, layout);
+  const Eigen::MatrixXd N = null_space(family->convention_rows(layout, X), layout.size());
+  const int p = int(N.cols());
   out.free_parameters = p;
   out.convention_basis = N;
-  out.theta = Eigen::VectorXd::Zero(kJointErrors);
-  out.targets = nominal.targets;
-  nominal_poses(open, data, nodes);
-  if (data.in_instrument_frame) out.registration = registration_of(nodes, out.targets);
+  out.fitted.assign(std::size_t(layout.family), false);
+  for (Eigen::Index j = 0; j < layout.family; ++j) out.fitted[std::size_t(j)] = N.row(j).norm() > 1e-12;
+  target_nodes(open, *family, data, p);  // enough nodes for the free parameters
+  const std::vector<std::string> names = full_names(*family, layout);
 
   // The descent (least_squares_step.hpp) on φ, x = N·φ.
   struct State {
-    Eigen::VectorXd theta;
+    Eigen::VectorXd errors;
     Pose<double> registration;
     std::vector<Vec3<double>> targets;
+    std::vector<NodeGuess> guesses;
     std::vector<Pose<double>> poses;
   };
-  State accepted{out.theta, out.registration, out.targets, {}};
-  for (const TargetNode& node : nodes) accepted.poses.push_back(node.pose);
+  State accepted{errors, out.registration, out.targets, {}, {}};
+  for (const TargetNode& node : nodes) {
+    accepted.guesses.push_back(node.guess);
+    accepted.poses.push_back(node.pose);
+  }
   State current = accepted;
   Eigen::VectorXd residual(n);
-  StewartGeometry<double> g;
   auto evaluate = [&]() -> detail::Evaluation {
-    g = stewart_with_errors(open.stewart(), current.theta);
     std::size_t reached = 0;
     double rss = 0;
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       Pose<double> pose;
-      if (stewart_fk(g, nodes[k].q, current.poses[k], pose).status != Status::Ok) continue;
+      if (!family->pose(current.errors, nodes[k].q, current.guesses[k], pose)) continue;
       current.poses[k] = pose;
       const TargetPoints r = nodes[k].measured - predicted_targets(current.registration, pose, current.targets);
       residual.segment(rows * Eigen::Index(k), rows) = r.reshaped();
@@ -238,17 +258,16 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
     // A node the machine cannot reach is worse than any residual.
     return {reached == nodes.size() ? rss : std::numeric_limits<double>::infinity(), reached};
   };
-  Eigen::MatrixXd X(n, layout.size());
   auto linearise = [&](Eigen::MatrixXd& design, Eigen::VectorXd& y) {
     for (std::size_t k = 0; k < nodes.size(); ++k)
       X.middleRows(rows * Eigen::Index(k), rows) =
-          full_design_rows(g, current.registration, current.targets, current.poses[k], layout);
+          full_design_rows(*family, current.errors, current.registration, current.targets, current.poses[k], layout);
     design = X * N;
     y = residual;
   };
   auto apply = [&](const Eigen::VectorXd& dphi) {
     const Eigen::VectorXd dx = N * dphi;
-    current.theta += dx.head(kJointErrors);
+    current.errors += dx.head(layout.family);
     if (layout.registration)
       current.registration = moved_registration(current.registration, dx.segment<6>(layout.registration_at()));
     for (int k = 0; k < layout.targets; ++k) current.targets[std::size_t(k)] += dx.segment<3>(layout.targets_at() + 3 * k);
@@ -258,7 +277,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
     StewartIteration rec;
     rec.iteration = iteration++;
     rec.rms_position_mm = std::sqrt(residual.squaredNorm() / double(n));
-    rec.step_norm = (current.theta - accepted.theta).norm();
+    rec.step_norm = (current.errors - accepted.errors).norm();
     out.history.push_back(rec);
   };
   const detail::DescentCount count = detail::damped_gauss_newton(
@@ -274,7 +293,7 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
   Eigen::MatrixXd A;
   Eigen::VectorXd y;
   linearise(A, y);
-  out.theta = current.theta;
+  out.errors = current.errors;
   out.registration = current.registration;
   out.targets = current.targets;
 
@@ -284,23 +303,22 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
   const Eigen::VectorXd& s = svd.singularValues();
   out.condition_number = s(0) / s(s.size() - 1);
   out.rank = int((s.array() > effective_rcond(kDefaultRcond, n, p) * s(0)).count());
-  const double rss = y.squaredNorm();
-  out.sigma_mm = std::sqrt(rss / double(std::max<Eigen::Index>(1, n - p)));
-  const Eigen::MatrixXd Vs = scale.cwiseInverse().asDiagonal() * svd.matrixV();
-  const Eigen::MatrixXd NV = N * Vs;  // x per unit of each singular direction
+  out.nodes = nodes.size();
+  out.sigma_mm = std::sqrt(y.squaredNorm() / double(std::max<Eigen::Index>(1, n - p)));
+  const Eigen::MatrixXd NV = N * (scale.cwiseInverse().asDiagonal() * svd.matrixV());  // x per singular direction
   if (out.rank < p) {
     const WeakCombination w = weakest_combinations(NV.col(p - 1) * NV.col(p - 1).transpose(), unit_weights(layout),
                                                    names, 1).front();
     throw InputError(data.file, 0, 0,
                      "the calibration poses do not determine the model from " + std::to_string(layout.targets) +
                          " target(s) (rank " + std::to_string(out.rank) + " of " + std::to_string(p) +
-                         "); not determined: " + describe(w) + ". Poses that also turn the platform, or more targets, "
-                         "separate them");
+                         "); not determined: " + describe(w) + ". Poses that also turn the " +
+                         (nominal.is_stewart() ? "platform" : "tool") + ", or more targets, separate them");
   }
   const Eigen::MatrixXd covariance =
       out.sigma_mm * out.sigma_mm * NV * s.array().square().inverse().matrix().asDiagonal() * NV.transpose();
   const Eigen::VectorXd se = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  out.standard_error = se.head(kJointErrors);
+  out.standard_error = se.head(layout.family);
   if (layout.registration) out.registration_standard_error = se.segment<6>(layout.registration_at());
   for (int k = 0; k < layout.targets; ++k) out.target_standard_error.push_back(se.segment<3>(layout.targets_at() + 3 * k));
   out.weakest = weakest_combinations(covariance, unit_weights(layout), names, 3);
@@ -324,42 +342,48 @@ StewartTargetCalibration calibrate_stewart_targets(const Robot& nominal, const P
 Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);
-  std::vector<TargetNode> nodes = target_nodes(open, data, 0);
-  nominal_poses(open, data, nodes);
+  const std::unique_ptr<TargetFamily> family = detail::target_family(open);
+  std::vector<TargetNode> nodes = target_nodes(open, *family, data, 0);
+  nominal_poses(*family, data, nodes);
   return registration_of(nodes, nominal.targets);
 }
 
-bool stewart_target_row(const Robot& nominal, const StewartTargetCalibration& c, const Vec6<double>& q,
-                        const Pose<double>& guess, const Eigen::Matrix<double, 3, 3>& measured, TargetRowModel& out) {
-  const Layout layout{int(c.targets.size()), c.instrument_frame};
-  const StewartGeometry<double> g = stewart_with_errors(without_limits(nominal.stewart()), c.theta);
-  if (stewart_fk(g, q, guess, out.pose).status != Status::Ok) return false;
-  out.residual = (measured.leftCols(layout.targets) - predicted_targets(c.registration, out.pose, c.targets)).reshaped();
-  out.M = target_map(c.registration, out.pose, c.targets);
-  out.H = full_design_rows(g, c.registration, c.targets, out.pose, layout) * c.convention_basis;
-  return true;
+std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, const TargetCalibration& c,
+                                                       const std::vector<TargetRowInput>& rows) {
+  const std::unique_ptr<TargetFamily> family = detail::target_family(nominal);
+  const TargetLayout layout{family->size(), int(c.targets.size()), c.instrument_frame};
+  std::vector<std::optional<TargetRowModel>> out;
+  for (const TargetRowInput& row : rows) {
+    NodeGuess guess = family->start(row.commanded);
+    TargetRowModel m;
+    if (!family->pose(c.errors, row.q, guess, m.pose)) {
+      out.emplace_back();
+      continue;
+    }
+    m.residual = (row.measured.leftCols(layout.targets) - predicted_targets(c.registration, m.pose, c.targets)).reshaped();
+    m.M = target_map(c.registration, m.pose, c.targets);
+    m.H = full_design_rows(*family, c.errors, c.registration, c.targets, m.pose, layout) * c.convention_basis;
+    out.emplace_back(std::move(m));
+  }
+  return out;
 }
 
-bool uses_target_model(const Robot& robot, const PoseTable& data) {
-  return robot.is_stewart() && data.has_targets && (!data.has_measured || data.in_instrument_frame);
-}
-
-StewartTargetOutlierSearch stewart_target_outlier_search(const Robot& nominal, const PoseTable& data,
-                                                         const StewartTargetCalibration& all,
-                                                         const StewartTargetOptions& options) {
+TargetOutlierSearch target_outlier_search(const Robot& nominal, const PoseTable& data, const TargetCalibration& all,
+                                          const TargetCalibrationOptions& options) {
   SequentialOutlierOptions so;
   so.min_nodes = std::max<Eigen::Index>(8, Eigen::Index(all.free_parameters) / (3 * data.target_columns()) + 3);
-  ScreenedFit<StewartTargetCalibration> s = screen_and_refit(
-      data, all, [](const StewartTargetCalibration& c) -> const LinearProblem& { return c.final_problem; },
-      [](const StewartTargetCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
-      [&](const PoseTable& rest) { return calibrate_stewart_targets(nominal, rest, options); }, so);
+  ScreenedFit<TargetCalibration> s = screen_and_refit(
+      data, all, [](const TargetCalibration& c) -> const LinearProblem& { return c.final_problem; },
+      [](const TargetCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
+      [&](const PoseTable& rest) { return calibrate_targets(nominal, rest, options); }, so);
   return outlier_search_of(std::move(s));
 }
 
-PoseErrorReport stewart_target_residuals(const Robot& nominal_in, const Robot& robot_in,
-                                         const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
-                                         const PoseTable& data) {
-  const Robot nominal = without_limits(nominal_in), robot = without_limits(robot_in);
+PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd& errors,
+                                 const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
+                                 const PoseTable& data) {
+  const Robot nominal = without_limits(nominal_in);
+  const std::unique_ptr<TargetFamily> family = detail::target_family(nominal);
   std::vector<PoseErrorRow> rows;
   std::vector<UnevaluatedRow> unevaluated;
   std::size_t skipped = 0;
@@ -374,9 +398,9 @@ PoseErrorReport stewart_target_residuals(const Robot& nominal_in, const Robot& r
       unevaluated.push_back({r.id, r.line, "nominal IK of the commanded pose failed (" + std::string(to_string(s)) + ")"});
       continue;
     }
-    if (const Status s = stewart_fk(robot.stewart(), q, Pose<double>::from_xyz_rpy(r.commanded), pose).status;
-        s != Status::Ok) {
-      unevaluated.push_back({r.id, r.line, "FK of the model failed (" + std::string(to_string(s)) + ")"});
+    NodeGuess guess = family->start(Pose<double>::from_xyz_rpy(r.commanded));
+    if (!family->pose(errors, q, guess, pose)) {
+      unevaluated.push_back({r.id, r.line, "FK of the model failed"});
       continue;
     }
     const TargetPoints predicted = predicted_targets(registration, pose, targets);
@@ -396,8 +420,7 @@ PoseErrorReport stewart_target_residuals(const Robot& nominal_in, const Robot& r
   return report;
 }
 
-CalibrationModel stewart_target_model(const Robot& nominal, const StewartTargetCalibration& c,
-                                      const std::string& data_file) {
+CalibrationModel target_model(const Robot& nominal, const TargetCalibration& c, const std::string& data_file) {
   CalibrationModel model;
   model.nominal = nominal;
   model.estimator = "ols";
@@ -405,9 +428,8 @@ CalibrationModel stewart_target_model(const Robot& nominal, const StewartTargetC
   model.settings["targets"] = double(c.targets.size());
   model.settings["instrument_frame"] = c.instrument_frame ? 1.0 : 0.0;
   model.data_file = data_file;
-  const std::vector<std::string> names = parameter_names(nominal);
-  for (int j = 0; j < kJointErrors; ++j)
-    model.parameters.push_back({names[std::size_t(j)], c.theta(j), c.standard_error(j), true});
+  for (std::size_t j = 0; j < c.names.size(); ++j)
+    model.parameters.push_back({c.names[j], c.errors(Eigen::Index(j)), c.standard_error(Eigen::Index(j)), c.fitted[j]});
   const Vec6<double> reg = c.registration.to_xyz_rpy();
   const char* reg_names[6] = {"reg_x", "reg_y", "reg_z", "reg_rx", "reg_ry", "reg_rz"};
   for (int j = 0; j < 6; ++j)

@@ -1,0 +1,135 @@
+// Calibration from laser-tracker targets (issue #12 item 2): one to three
+// targets on the platform (6-UPS) or the tool (hybrid), their positions
+// measured per pose in the robot's base frame or, with
+// PoseTable::in_instrument_frame, in the tracker's own frame.
+//
+// Unknowns: the family's error parameters (6-UPS: seed 001's 42 joint errors;
+// hybrid: seed 000's 150 source errors), the targets' positions (3 per
+// target) and, in the tracker's frame, its registration (6). Positions of
+// targets fix the machine only up to what a registration and the targets'
+// positions can absorb, so a stated convention closes it:
+//   - 6-UPS (target_measurement.hpp rigid_motion_rows): the platform joints'
+//     errors carry no net rigid motion (moving all of them and the targets
+//     together changes no measurement); in the tracker's frame neither do
+//     the base joints' (moving all of them is a change of registration);
+//   - hybrid: seed 000 Section 4.1's column selection with the instrument's
+//     columns placed first: a source error whose column the registration,
+//     the targets or the errors before it already span is held at 0.
+// The fit is Gauss–Newton on the nonlinear model (exact FK of the erroneous
+// machine) in the coordinates of the convention's null space, damped as every
+// host fit (least_squares_step.hpp), from the nominal machine and the rigid
+// fit of measured against nominal targets.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kincal/core/pose.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/estimators.hpp"
+#include "kincal/identify/model.hpp"
+#include "kincal/identify/outliers.hpp"
+#include "kincal/identify/pose_errors.hpp"
+#include "kincal/identify/robot.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
+
+namespace kincal::identify {
+
+struct TargetCalibrationOptions {
+  int max_iterations = 60;
+};
+
+// A combination of parameters the data determine worst: the unit direction
+// (rotations weighted by 1 m, so every term is in mm) and its standard
+// deviation at the data's noise.
+struct WeakCombination {
+  double standard_deviation_mm = 0;
+  std::vector<std::pair<std::string, double>> terms;  // largest first, |coefficient| ≥ 0.1
+};
+
+struct TargetCalibration {
+  std::vector<std::string> names;  // of errors: the family's parameter names
+  Eigen::VectorXd errors;          // the family's error parameters, in the convention
+  Eigen::VectorXd standard_error;  // of errors (0 where held)
+  std::vector<bool> fitted;        // false: held at 0 by the convention (hybrid)
+  std::string convention;          // as the identify line says it
+  bool instrument_frame = false;
+  Pose<double> registration;       // base frame in the instrument frame (identity unless instrument_frame)
+  Vec6<double> registration_standard_error = Vec6<double>::Zero();  // of its twist (mm, rad; instrument axes)
+  std::vector<Vec3<double>> targets;                // identified positions on the platform / tool, mm
+  std::vector<Vec3<double>> target_standard_error;  // of each coordinate
+  std::vector<StewartIteration> history;  // rms_position_mm: RMS target residual per coordinate
+  std::size_t nodes = 0;
+  int free_parameters = 0;         // family + 3k (+ 6) minus the convention's rows
+  int rank = 0;
+  double condition_number = 0;     // of the column-scaled design in the convention's coordinates
+  double sigma_mm = 0;             // per target coordinate: (RSS / (n − p))^½
+  std::vector<WeakCombination> weakest;  // the three worst-determined combinations, worst first
+  std::vector<NodeTest> node_tests;
+  std::vector<std::string> outliers;
+  double outlier_p_threshold = 0;
+  LinearProblem final_problem;     // the design at the solution (row_node: node index), residuals as y
+  OutlierReport outlier_report;
+  Eigen::MatrixXd convention_basis;  // N: x = N·φ (x: the family's errors, registration twist if free, 3 per target)
+};
+
+// Whether a table is identified from its targets: it has target columns and
+//   - 6-UPS: no measured poses, or its targets are in the instrument's frame;
+//   - hybrid: the robot description names `targets` (without them the
+//     columns are seed 000's gauge), or they are in the instrument's frame.
+bool uses_target_model(const Robot& robot, const PoseTable& data);
+
+// Identifies from the table's cal rows with target positions (t1..tk). The
+// robot description's `targets` are the nominal positions (their count must be
+// the table's). Throws InputError for a robot without `targets`, a count
+// mismatch, too few nodes, a design that does not determine the parameters
+// (naming the weakest combination), or FK failures.
+TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
+                                    const TargetCalibrationOptions& options = {});
+
+// The registration that lays the nominal machine's targets (FK of the rows'
+// commands) best onto the measured ones, over every usable cal row: the fit's
+// start in the instrument frame, and the nominal model's for its residuals.
+Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data);
+
+// The outlier screen of identify/outliers.hpp around it.
+using TargetOutlierSearch = OutlierSearch<TargetCalibration>;
+TargetOutlierSearch target_outlier_search(const Robot& nominal, const PoseTable& data, const TargetCalibration& all,
+                                          const TargetCalibrationOptions& options = {});
+inline const OutlierReport* outlier_report_of(const TargetCalibration& c) { return &c.outlier_report; }
+
+// Residuals at the target points of every measured row: measured − the
+// model's prediction (the machine with `errors` — the family's full vector,
+// zero for the nominal one — at the row's commands, q1..q6 or the nominal IK
+// of the commanded pose, then the registration and targets). One report row
+// per target point (id "ROW:tK"), position only (PoseErrorReport::target_points).
+PoseErrorReport target_residuals(const Robot& nominal, const Eigen::VectorXd& errors, const Pose<double>& registration,
+                                 const std::vector<Vec3<double>>& targets, const PoseTable& data);
+
+// Rows at a calibration's solution, for the diagnosis and the effect fits
+// (identify/src/base_fit.hpp): per row (commands q, commanded pose, measured
+// targets) the model's pose, the target residual (3k), the measurement map M
+// (3k × 6) and the design rows in the convention's coordinates
+// (3k × free_parameters); nullopt where the model's FK fails.
+struct TargetRowInput {
+  Vec6<double> q;
+  Pose<double> commanded;
+  Eigen::Matrix<double, 3, 3> measured;
+};
+struct TargetRowModel {
+  Pose<double> pose;
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd M, H;
+};
+std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, const TargetCalibration& c,
+                                                       const std::vector<TargetRowInput>& rows);
+
+// MODEL.json: the family's errors (held ones not identifiable) and the
+// instrument (registration and targets).
+CalibrationModel target_model(const Robot& nominal, const TargetCalibration& c, const std::string& data_file);
+
+}  // namespace kincal::identify

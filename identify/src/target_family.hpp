@@ -1,0 +1,62 @@
+// What the laser-tracker target fit (target_calibration.cpp) needs of a
+// machine family, and nothing more (private to identify/; docs/architecture.md):
+//   (a) the machine's pose for its error parameters and a node's commands,
+//   (b) the pose error twist per error parameter at that pose, and
+//   (c) the convention rows that close what target positions cannot fix.
+// Registration, targets, the descent, rank, covariance, node tests and the
+// residual reports are the fit's, the same for every family.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/pose.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify::detail {
+
+// Where a node's pose was last found: the start of its next evaluation.
+struct NodeGuess {
+  Pose<double> pose;              // the commanded pose at first
+  HybridPassive<double> passive;  // hybrid: the UP limb's passive joints
+};
+
+// The full parameter vector x of a target fit: the family's errors, then the
+// registration twist (instrument frame only), then 3 per target.
+struct TargetLayout {
+  int family = 0;
+  int targets = 0;
+  bool registration = false;
+  int registration_at() const { return family; }
+  int targets_at() const { return family + (registration ? 6 : 0); }
+  int size() const { return targets_at() + 3 * targets; }
+};
+
+class TargetFamily {
+ public:
+  virtual ~TargetFamily() = default;
+  // The family's error parameters (6-UPS: seed 001's 42; hybrid: seed 000's 150).
+  virtual int size() const = 0;
+  virtual std::vector<std::string> names() const = 0;
+  // The first guess of a node commanded to `commanded` (its nominal IK's
+  // passive joints for the hybrid).
+  virtual NodeGuess start(const Pose<double>& commanded) const = 0;
+  // (a) The pose for `errors` at commands q from `guess` (updated on success).
+  virtual bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const = 0;
+  // (b) The twist (v at the pose's origin, ω; base axes) per error parameter, 6 × size().
+  virtual Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const = 0;
+  // (c) Rows over x (layout.size() columns) the fit holds at zero, given the
+  // design over x at the start (nominal machine, starting registration).
+  virtual Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd& start_design) const = 0;
+  // How the convention reads (the identify line and docs).
+  virtual std::string convention() const = 0;
+};
+
+// The family of `robot` (limits removed: the machine was where it was measured).
+std::unique_ptr<TargetFamily> target_family(const Robot& robot);
+
+}  // namespace kincal::identify::detail
