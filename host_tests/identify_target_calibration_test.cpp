@@ -592,8 +592,13 @@ INSTANTIATE_TEST_SUITE_P(ThreeAndOneTargets, HybridTracker, ::testing::Range(0, 
 
 namespace {
 
-TEST(HybridTracker, HiddenBacklashIsNamedFittedAndCompensatedFromOneTarget) {
-  const std::vector<Vec3<double>> nominal_targets{{40, 20, -50}};
+class HybridTrackerEffect : public ::testing::TestWithParam<int> {};
+
+TEST_P(HybridTrackerEffect, HiddenBacklashIsNamedFittedAndCompensated) {
+  const bool three = GetParam() == 0;
+  const std::vector<Vec3<double>> nominal_targets =
+      three ? std::vector<Vec3<double>>{{60, 0, -40}, {-30, 52, -40}, {-30, -52, -40}}
+            : std::vector<Vec3<double>>{{40, 20, -50}};
   const std::vector<Vec3<double>> true_targets = moved_targets(nominal_targets, 600, 0.3);
   Vec6<double> backlash;
   backlash << 0.02, -0.015, 0, 0, 0, 0;
@@ -601,7 +606,8 @@ TEST(HybridTracker, HiddenBacklashIsNamedFittedAndCompensatedFromOneTarget) {
   const HybridTrackerRun floor =
       run_hybrid_case(nominal_targets, moved_targets(nominal_targets, 600, 0.003), 0.01, 41, backlash / 100);
   ASSERT_TRUE(big.diagnosis);
-  std::cout << "hybrid, one target, hidden backlash: diagnosis " << big.diagnosis->verdict << " (accepted "
+  std::cout << "hybrid, " << (three ? "three targets" : "one target") << ", hidden backlash: diagnosis "
+            << big.diagnosis->verdict << " (accepted "
             << (big.diagnosis->accepted.empty() ? std::string("none") : big.diagnosis->accepted.front())
             << "), b1 " << big.backlash(0) << " b2 " << big.backlash(1) << " mm, compensated " << big.compensated_rms_um
             << " um (floor " << floor.compensated_rms_um << ")\n";
@@ -611,5 +617,7 @@ TEST(HybridTracker, HiddenBacklashIsNamedFittedAndCompensatedFromOneTarget) {
   EXPECT_NEAR(big.backlash(1), -0.015, 0.003);
   EXPECT_LE(big.compensated_rms_um, 1.5 * floor.compensated_rms_um);
 }
+
+INSTANTIATE_TEST_SUITE_P(ThreeAndOneTargets, HybridTrackerEffect, ::testing::Range(0, 2));
 
 }  // namespace

@@ -57,7 +57,7 @@ sanitize_skip+='|HiddenEffect.IsNamedFirstAcceptedAndCompensated/hybrid_scale'
 sanitize_skip+='|IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable|HoldsParametersTheDataCannotTellFromTheBase'
 sanitize_skip+='|HybridUpsActuatorScaleIsFittedFromAFarStart|HybridPairsAreNamedAndCompensatedNearTheFloor'
 sanitize_skip+='|HybridEliminationRoundsKeepTheMinimum|HybridRivalEffectsAreChosenByMallowsCp'
-sanitize_skip+='|HiddenBacklashIsNamedFittedAndCompensatedFromOneTarget'
+sanitize_skip+='|HybridTrackerEffect'
 
 mkdir -p build
 for stage in "${stages[@]}"; do
