@@ -61,8 +61,20 @@ void require_targets(const Robot& nominal, const PoseTable& data) {
                          "`targets` name " + std::to_string(nominal.targets.size()));
 }
 
-std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& family, const PoseTable& data,
-                                     int free_parameters) {
+// Enough nodes for the free parameters, with some left for the noise.
+void require_enough_nodes(std::size_t nodes, int free_parameters, const Robot& robot, const PoseTable& data) {
+  const std::size_t rows_per_node = 3 * std::size_t(data.target_columns());
+  const std::size_t needed = std::size_t(free_parameters) / rows_per_node + 3;
+  if (nodes < needed)
+    throw InputError(data.file, 0, 0,
+                     "only " + std::to_string(nodes) + " calibration nodes with target positions; " +
+                         std::to_string(free_parameters) + " free parameters measured by " +
+                         std::to_string(rows_per_node) + " coordinates per node need at least " +
+                         std::to_string(needed) + " (and poses that also turn the " +
+                         (robot.is_stewart() ? "platform" : "tool") + ")");
+}
+
+std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& family, const PoseTable& data) {
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
     if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
@@ -75,15 +87,6 @@ std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& fami
                            "); give the joint commands q1..q6 or drop the row");
     nodes.push_back(std::move(n));
   }
-  const std::size_t rows_per_node = 3 * std::size_t(data.target_columns());
-  const std::size_t needed = std::size_t(free_parameters) / rows_per_node + 3;
-  if (nodes.size() < needed)
-    throw InputError(data.file, 0, 0,
-                     "only " + std::to_string(nodes.size()) + " calibration nodes with target positions; " +
-                         std::to_string(free_parameters) + " free parameters measured by " +
-                         std::to_string(rows_per_node) + " coordinates per node need at least " +
-                         std::to_string(needed) + " (and poses that also turn the " +
-                         (open.is_stewart() ? "platform" : "tool") + ")");
   return nodes;
 }
 
@@ -209,8 +212,10 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   // The nominal machine's poses, then (in the instrument frame) the
   // registration that best lays the nominal targets onto the measured ones.
   // The node count is checked against the parameters before the convention
-  // (which needs the nodes' design) and again after it.
-  std::vector<TargetNode> nodes = target_nodes(open, *family, data, 0);
+  // (which needs the nodes' design: the instrument's columns at least) and
+  // again after it.
+  std::vector<TargetNode> nodes = target_nodes(open, *family, data);
+  require_enough_nodes(nodes.size(), 6 * int(layout.registration) + 3 * layout.targets, nominal, data);
   nominal_poses(*family, data, nodes);
   if (out.instrument_frame) out.registration = registration_of(nodes, out.targets);
   const Eigen::Index n = rows * Eigen::Index(nodes.size());
@@ -225,7 +230,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   out.convention_basis = N;
   out.fitted.assign(std::size_t(layout.family), false);
   for (Eigen::Index j = 0; j < layout.family; ++j) out.fitted[std::size_t(j)] = N.row(j).norm() > 1e-12;
-  target_nodes(open, *family, data, p);  // enough nodes for the free parameters
+  require_enough_nodes(nodes.size(), p, nominal, data);
   const std::vector<std::string> names = full_names(*family, layout);
 
   // The descent (least_squares_step.hpp) on φ, x = N·φ.
@@ -343,7 +348,7 @@ Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);
   const std::unique_ptr<TargetFamily> family = detail::target_family(open);
-  std::vector<TargetNode> nodes = target_nodes(open, *family, data, 0);
+  std::vector<TargetNode> nodes = target_nodes(open, *family, data);
   nominal_poses(*family, data, nodes);
   return registration_of(nodes, nominal.targets);
 }
