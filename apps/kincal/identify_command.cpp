@@ -317,7 +317,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
   const int held = family_size + 3 * int(c.targets.size()) + (a.instrument_frame ? 6 : 0) - c.free_parameters;
   std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (" << family_size
             << " errors, " << 3 * c.targets.size() << " target coordinates"
-            << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " the frame convention fixes: "
+            << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " fixed by the frame convention: "
             << c.convention << "), rank " << c.rank << ", condition number (column-scaled) " << c.condition_number
             << "\n";
   std::cout << "  iteration   rms target residual (um)\n";
