@@ -30,6 +30,7 @@
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
 #include "kincal/identify/target_calibration.hpp"
 #include "kincal/identify/target_measurement.hpp"
 #include "large_hexapod.hpp"

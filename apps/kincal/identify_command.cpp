@@ -321,7 +321,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
             << c.convention << "), rank " << c.rank << ", condition number (column-scaled) " << c.condition_number
             << "\n";
   std::cout << "  iteration   rms target residual (um)\n";
-  for (const ki::StewartIteration& h : c.history) {
+  for (const ki::TargetIteration& h : c.history) {
     char line[96];
     std::snprintf(line, sizeof line, "  %9d %26.4f\n", h.iteration, 1e3 * h.rms_position_mm);
     std::cout << line;

@@ -279,7 +279,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   };
   int iteration = 0;
   auto record = [&]() {
-    StewartIteration rec;
+    TargetIteration rec;
     rec.iteration = iteration++;
     rec.rms_position_mm = std::sqrt(residual.squaredNorm() / double(n));
     rec.step_norm = (current.errors - accepted.errors).norm();

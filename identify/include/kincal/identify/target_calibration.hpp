@@ -35,7 +35,6 @@
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/pose_errors.hpp"
 #include "kincal/identify/robot.hpp"
-#include "kincal/identify/stewart_calibration.hpp"
 
 namespace kincal::identify {
 
@@ -51,6 +50,13 @@ struct WeakCombination {
   std::vector<std::pair<std::string, double>> terms;  // largest first, |coefficient| ≥ 0.1
 };
 
+// One accepted iterate of the descent.
+struct TargetIteration {
+  int iteration = 0;
+  double rms_position_mm = 0;  // RMS target residual per coordinate
+  double step_norm = 0;        // |Δ errors| from the previous accepted iterate
+};
+
 struct TargetCalibration {
   std::vector<std::string> names;  // of errors: the family's parameter names
   Eigen::VectorXd errors;          // the family's error parameters, in the convention
@@ -62,7 +68,7 @@ struct TargetCalibration {
   Vec6<double> registration_standard_error = Vec6<double>::Zero();  // of its twist (mm, rad; instrument axes)
   std::vector<Vec3<double>> targets;                // identified positions on the platform / tool, mm
   std::vector<Vec3<double>> target_standard_error;  // of each coordinate
-  std::vector<StewartIteration> history;  // rms_position_mm: RMS target residual per coordinate
+  std::vector<TargetIteration> history;
   std::size_t nodes = 0;
   int free_parameters = 0;         // family + 3k (+ 6) minus the convention's rows
   int rank = 0;
