@@ -909,6 +909,8 @@ TEST(appKincal, OneTrackerTargetInItsOwnFrameThroughTheTool) {
   const nlohmann::json summary = nlohmann::json::parse(ki::read_text_file(kDir + "/tracker_summary.json"));
   EXPECT_EQ(summary["measurement"]["targets"], 1);
   EXPECT_EQ(summary["parameters"], 39);
+  EXPECT_TRUE(summary["dropped"].empty());  // the 6-UPS's convention is a combination, no error held
+  EXPECT_TRUE(contains(summary["convention"].get<std::string>(), "no net rigid motion"));
   EXPECT_EQ(summary["weakest_combinations"].size(), 3u);
   // The nest is 0.3 mm off in x and 0.4 in y: found within the combined
   // standard errors (about 0.1 mm with one target on this small machine).

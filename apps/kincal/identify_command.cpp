@@ -320,6 +320,10 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
             << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " fixed by the frame convention: "
             << c.convention << "), rank " << c.rank << ", condition number (column-scaled) " << c.condition_number
             << "\n";
+  const auto held_errors = std::count(c.fitted.begin(), c.fitted.end(), false);
+  if (held_errors > 0)
+    std::cout << "  " << held_errors << " of the " << family_size
+              << " errors held at 0 by the convention (MODEL.json: identifiable false; SUMMARY.json: dropped)\n";
   std::cout << "  iteration   rms target residual (um)\n";
   for (const ki::TargetIteration& h : c.history) {
     char line[96];
@@ -364,7 +368,13 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     j["measurement"] = {{"targets", data.target_columns()}, {"instrument_frame", a.instrument_frame}};
     j["rank"] = used.rank;
     j["parameters"] = used.free_parameters;
-    j["dropped"] = nlohmann::json::array();
+    // The family's errors the convention holds at 0 (the hybrid's column
+    // selection; none on the 6-UPS, whose convention is a combination).
+    nlohmann::json dropped = nlohmann::json::array();
+    for (std::size_t i = 0; i < used.names.size(); ++i)
+      if (!used.fitted[i]) dropped.push_back(used.names[i]);
+    j["dropped"] = dropped;
+    j["convention"] = used.convention;
     j["condition_number"] = used.condition_number;
     j["sigma_um"] = 1e3 * used.sigma_mm;
     j["iterations"] = used.history.size();
