@@ -300,20 +300,20 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
-// Laser-tracker targets on a 6-UPS (target_calibration.hpp): seed
-// 001's 42 errors with the targets' positions and, in the instrument's
+// Laser-tracker targets, either family (target_calibration.hpp): the
+// family's errors with the targets' positions and, in the instrument's
 // frame, its registration; the frame convention closes what target
 // positions cannot fix.
 int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
   if (!a.estimator.empty() && a.estimator != "ols")
     throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
   const ki::TargetCalibrationOptions options;
-  const int family_size = robot.is_stewart() ? 42 : 150;
   std::cout << "identify: " << a.data << ", robot " << robot.name << " ("
             << (robot.is_stewart() ? "42-parameter model of seed 001" : "150 source errors of seed 000") << " from "
             << data.target_columns() << " target(s) measured in the "
             << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
   const ki::TargetCalibration c = ki::calibrate_targets(robot, data, options);
+  const int family_size = int(c.names.size());
   const int held = family_size + 3 * int(c.targets.size()) + (a.instrument_frame ? 6 : 0) - c.free_parameters;
   std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (" << family_size
             << " errors, " << 3 * c.targets.size() << " target coordinates"

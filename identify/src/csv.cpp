@@ -250,7 +250,7 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
   Group id({"id"}), pose({"x", "y", "z", "rx", "ry", "rz"});
   Group measured({"mx", "my", "mz", "mrx", "mry", "mrz"});
   // One to three laser-tracker targets (t1 first): the hybrid's gauge uses all
-  // three; a 6-UPS any leading ones (stewart_target_calibration.hpp).
+  // three; tracker targets any leading ones (target_calibration.hpp).
   Group targets[3] = {Group({"t1x", "t1y", "t1z"}), Group({"t2x", "t2y", "t2z"}), Group({"t3x", "t3y", "t3z"})};
   Group q(numbered("q", n)), dir(numbered("dir", n));
   Group layer({"layer"}), role({"role"}), temp({"temp"}), time({"time"}), status({"status"});

@@ -226,17 +226,16 @@ struct NodeTwist {
   Twist<double> twist;
   Vec6<double> joint;          // implied joint error J⁻¹·twist (mm or rad)
   Vec6<double> joint_noise_sd;  // its standard deviation from measurement noise of σ = 1
+  // M measures the whole twist. One or two targets do not (one: no rotation;
+  // two: none about their line): the twist is then the least-norm one and the
+  // per-joint picture is left out (DiagnosisRun::by_joint).
+  bool whole = true;
 };
-
-// One or two targets do not measure a node's whole twist (one: no rotation;
-// two: none about their line): the twist is then the least-norm one and the
-// per-joint picture is left out (DiagnosisRun::by_joint).
-bool measures_twist(const NodeData& n) { return Eigen::ColPivHouseholderQR<MatrixXd>(n.M).rank() == 6; }
 
 NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
   NodeTwist out;
   const Eigen::ColPivHouseholderQR<MatrixXd> qr(n.M);
-  const bool whole = qr.rank() == 6;
+  const bool whole = out.whole = qr.rank() == 6;
   out.twist = whole ? VectorXd(qr.solve(r)) : VectorXd(Eigen::CompleteOrthogonalDecomposition<MatrixXd>(n.M).solve(r));
   const Eigen::PartialPivLU<Mat6<double>> J(n.effect.joint_twist);
   out.joint = J.solve(out.twist);
@@ -829,7 +828,7 @@ void DiagnosisRun::by_region() {
 }
 
 void DiagnosisRun::by_joint() {
-  if (!std::all_of(base.nodes.begin(), base.nodes.end(), measures_twist)) {
+  if (!std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
     d.notes.push_back("fewer than three targets do not measure each node's whole pose: no per-joint residual map");
     return;
   }

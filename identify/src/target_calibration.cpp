@@ -45,8 +45,7 @@ struct TargetNode {
   std::string id;
   Vec6<double> q;
   TargetPoints measured;
-  NodeGuess guess;    // where the model's pose was last found
-  Pose<double> pose;  // the model's pose at q
+  NodeGuess guess;  // guess.pose: the model's pose at q, last found
 };
 
 void require_targets(const Robot& nominal, const PoseTable& data) {
@@ -80,7 +79,7 @@ std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& fami
     if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
     const Pose<double> commanded = Pose<double>::from_xyz_rpy(r.commanded);
     TargetNode n{r.line, r.id, Vec6<double>::Zero(), r.targets->leftCols(data.target_columns()),
-                 family.start(commanded), commanded};
+                 family.start(commanded)};
     if (const Status s = row_commands(open, r, n.q); s != Status::Ok)
       throw InputError(data.file, r.line, 0,
                        "row '" + r.id + "': nominal IK of the commanded pose failed (" + to_string(s) +
@@ -93,8 +92,9 @@ std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& fami
 // The nodes' poses on the nominal machine.
 void nominal_poses(const TargetFamily& family, const PoseTable& data, std::vector<TargetNode>& nodes) {
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(family.size());
+  Pose<double> pose;
   for (TargetNode& node : nodes)
-    if (!family.pose(zero, node.q, node.guess, node.pose))
+    if (!family.pose(zero, node.q, node.guess, pose))
       throw InputError(data.file, node.line, 0,
                        "row '" + node.id + "': FK of the nominal machine failed from the commanded pose; check the "
                        "robot description and the row");
@@ -105,7 +105,7 @@ Pose<double> registration_of(const std::vector<TargetNode>& nodes, const std::ve
   const Eigen::Index k = Eigen::Index(targets.size());
   TargetPoints from(3, k * Eigen::Index(nodes.size())), to(3, k * Eigen::Index(nodes.size()));
   for (std::size_t j = 0; j < nodes.size(); ++j) {
-    from.middleCols(k * Eigen::Index(j), k) = predicted_targets({}, nodes[j].pose, targets);
+    from.middleCols(k * Eigen::Index(j), k) = predicted_targets({}, nodes[j].guess.pose, targets);
     to.middleCols(k * Eigen::Index(j), k) = nodes[j].measured;
   }
   return rigid_fit(from, to);
@@ -223,7 +223,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   Eigen::MatrixXd X(n, layout.size());
   for (std::size_t k = 0; k < nodes.size(); ++k)
     X.middleRows(rows * Eigen::Index(k), rows) =
-        full_design_rows(*family, errors, out.registration, out.targets, nodes[k].pose, layout);
+        full_design_rows(*family, errors, out.registration, out.targets, nodes[k].guess.pose, layout);
   const Eigen::MatrixXd N = null_space(family->convention_rows(layout, X), layout.size());
   const int p = int(N.cols());
   out.free_parameters = p;
@@ -238,14 +238,10 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
     Eigen::VectorXd errors;
     Pose<double> registration;
     std::vector<Vec3<double>> targets;
-    std::vector<NodeGuess> guesses;
-    std::vector<Pose<double>> poses;
+    std::vector<NodeGuess> guesses;  // guesses[k].pose: node k's pose at `errors`
   };
-  State accepted{errors, out.registration, out.targets, {}, {}};
-  for (const TargetNode& node : nodes) {
-    accepted.guesses.push_back(node.guess);
-    accepted.poses.push_back(node.pose);
-  }
+  State accepted{errors, out.registration, out.targets, {}};
+  for (const TargetNode& node : nodes) accepted.guesses.push_back(node.guess);
   State current = accepted;
   Eigen::VectorXd residual(n);
   auto evaluate = [&]() -> detail::Evaluation {
@@ -254,7 +250,6 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       Pose<double> pose;
       if (!family->pose(current.errors, nodes[k].q, current.guesses[k], pose)) continue;
-      current.poses[k] = pose;
       const TargetPoints r = nodes[k].measured - predicted_targets(current.registration, pose, current.targets);
       residual.segment(rows * Eigen::Index(k), rows) = r.reshaped();
       rss += r.squaredNorm();
@@ -266,7 +261,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   auto linearise = [&](Eigen::MatrixXd& design, Eigen::VectorXd& y) {
     for (std::size_t k = 0; k < nodes.size(); ++k)
       X.middleRows(rows * Eigen::Index(k), rows) =
-          full_design_rows(*family, current.errors, current.registration, current.targets, current.poses[k], layout);
+          full_design_rows(*family, current.errors, current.registration, current.targets, current.guesses[k].pose, layout);
     design = X * N;
     y = residual;
   };

@@ -21,7 +21,7 @@ namespace kincal::identify::detail {
 
 // Where a node's pose was last found: the start of its next evaluation.
 struct NodeGuess {
-  Pose<double> pose;              // the commanded pose at first
+  Pose<double> pose;              // the commanded pose at first, then the pose last found
   HybridPassive<double> passive;  // hybrid: the UP limb's passive joints
 };
 
@@ -45,7 +45,8 @@ class TargetFamily {
   // The first guess of a node commanded to `commanded` (its nominal IK's
   // passive joints for the hybrid).
   virtual NodeGuess start(const Pose<double>& commanded) const = 0;
-  // (a) The pose for `errors` at commands q from `guess` (updated on success).
+  // (a) The pose for `errors` at commands q from `guess`; on success `guess`
+  // is updated (guess.pose = pose).
   virtual bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const = 0;
   // (b) The twist (v at the pose's origin, ω; base axes) per error parameter, 6 × size().
   virtual Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const = 0;
