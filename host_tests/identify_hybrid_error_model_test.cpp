@@ -21,6 +21,8 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"
 
+#include "../identify/src/chain_kinematics.hpp"  // the closed-form limb closure, tested on its own
+
 namespace {
 
 using kincal::HybridPassive;
@@ -155,6 +157,64 @@ TEST(identifyHybridErrorModel, ZeroErrorsReproduceCoreFkOverTheCuboid) {
   std::printf("zero errors vs core hybrid_fk over %d poses: worst %.3g mm, %.3g rad\n", count, worst_p, worst_r);
   EXPECT_LT(worst_p, 1e-9);
   EXPECT_LT(worst_r, 1e-12);
+}
+
+// The UPS limbs' nominal closure (the closed form of chain_kinematics.hpp,
+// which B uses at every pose; its Newton fallback would hide a wrong closed
+// form from ups_frames, so the joint values are compared too) against a
+// closure this test makes itself: Newton with a finite-difference Jacobian of
+// the limb's own frames, from the reference configuration. Poses: the cuboid,
+// then tilts of 0.3 rad and an 80 mm excursion below it (past the task, where
+// the S angles are large).
+TEST(identifyHybridErrorModel, UpsClosureInClosedFormMatchesAnIndependentNewton) {
+  const HybridErrorModel& m = model();
+  std::vector<Pose<double>> poses = cuboid_poses();
+  poses.push_back(Pose<double>::from_xyz_rpy(-150, 60, -140, 0.3, -0.25, 0.3));
+  poses.push_back(Pose<double>::from_xyz_rpy(200, -220, 40, -0.3, 0.3, -0.2));
+  const double e = kincal::identify::HybridErrorModelOptions().up_split;
+  double worst = 0;
+  for (const Pose<double>& pose : poses) {
+    const Nominal n = nominal_joints(pose);
+    const double xu[3] = {n.passive.theta1, n.passive.theta2, n.passive.extension - e};
+    const Pose<double> platform = m.chain_frames(3, Pose<double>(), xu, nullptr).end;
+    for (int i = 0; i < 3; ++i) {
+      kincal::identify::HybridChainFrames ours;
+      ASSERT_TRUE(m.ups_frames(i, platform, ours));
+      const Pose<double> target = platform * m.attachment(i);
+      auto residual = [&](const Vec6<double>& x) {
+        const Pose<double> end = m.chain_frames(i, Pose<double>(), x.data(), nullptr).end;
+        Vec6<double> r;
+        r.head<3>() = end.p - target.p;
+        r.tail<3>() = kLength * kincal::log_so3(kincal::Mat3<double>(end.R * target.R.transpose()));
+        return r;
+      };
+      const kincal::Vec3<double> A1 = m.chain(i).base.p, A6 = target.p;
+      Vec6<double> x;
+      x << 0, 0, (A6 - A1).norm(), 0, 0, 0;
+      for (int it = 0; it < 30 && residual(x).norm() > 1e-12; ++it) {
+        Eigen::Matrix<double, 6, 6> J;
+        for (int k = 0; k < 6; ++k) {
+          Vec6<double> d = Vec6<double>::Zero();
+          d(k) = 1e-7;
+          J.col(k) = (residual(x + d) - residual(x - d)) / 2e-7;
+        }
+        x -= J.partialPivLu().solve(residual(x));
+      }
+      ASSERT_LT(residual(x).norm(), 1e-9);
+      Vec6<double> closed;  // the hybrid's reference end frame has the platform's axes: E = attachment's R
+      ASSERT_TRUE(kincal::identify::chain::nominal_ups_joints(A1, m.attachment(i).R, target, closed));
+      worst = std::max(worst, (closed - x).cwiseAbs().maxCoeff() * kLength);
+      const kincal::identify::HybridChainFrames theirs = m.chain_frames(i, Pose<double>(), x.data(), nullptr);
+      ASSERT_EQ(ours.count, theirs.count);
+      for (int f = 0; f < ours.count; ++f) {
+        worst = std::max(worst, (ours.axis[std::size_t(f)].p - theirs.axis[std::size_t(f)].p).norm());
+        worst = std::max(worst, kLength * (ours.axis[std::size_t(f)].R - theirs.axis[std::size_t(f)].R).norm());
+      }
+    }
+  }
+  std::printf("UPS closure, closed form vs FD Newton over %zu poses: worst joint or frame difference %.3g mm (rad × 1 m)\n", poses.size(),
+              worst);
+  EXPECT_LT(worst, 1e-8);
 }
 
 TEST(identifyHybridErrorModel, EveryColumnMatchesCentralDifferences) {

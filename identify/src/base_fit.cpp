@@ -206,7 +206,7 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
   };
   BaseModel base;
   base.parameters = p_;
-  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  MatrixXd B(6, HybridErrorModel::kParameterCount), B_kept(6, p_);
   const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
   const std::vector<std::optional<EffectNode>>& en = *en_;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
@@ -250,8 +250,8 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
     n.r.resize(9);
     for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
     n.M = gauge_map(g0_, robot_->gauge_radius, predicted);
-    n.H.resize(9, p_);
-    for (Index j = 0; j < p_; ++j) n.H.col(j) = n.M * B.col(cal_.kept[std::size_t(j)]);
+    for (Index j = 0; j < p_; ++j) B_kept.col(j) = B.col(cal_.kept[std::size_t(j)]);
+    n.H.noalias() = n.M * B_kept;  // one product, not a matrix–vector product per kept column
     n.effect = *en[k];
     n.joint_map = joint_map;
     base.nodes.push_back(std::move(n));

@@ -90,13 +90,13 @@ MatrixXd design(const Stack& s, const std::vector<std::string>& effects) {
   return X;
 }
 
-FitResult fit(const Stack& cal, const Stack& test, const std::vector<std::string>& effects) {
+// Residuals and RMS on both roles of the coefficients `coef` (of rank `rank`).
+FitResult fit_result(const Stack& cal, const Stack& test, const std::vector<std::string>& effects, VectorXd coef,
+                     Index rank) {
   FitResult f;
-  const MatrixXd Xc = design(cal, effects);
-  const LeastSquares ls(Xc);
-  f.coef = ls.solve(cal.y);
-  f.rank = ls.rank();
-  f.r_cal = cal.y - Xc * f.coef;
+  f.coef = std::move(coef);
+  f.rank = rank;
+  f.r_cal = cal.y - design(cal, effects) * f.coef;
   f.rss = f.r_cal.squaredNorm();
   f.rms.cal = rms_of(f.r_cal) * kMicro;
   f.rms.cal_nodes = cal.node.size();
@@ -106,6 +106,11 @@ FitResult fit(const Stack& cal, const Stack& test, const std::vector<std::string
     f.rms.test_nodes = test.node.size();
   }
   return f;
+}
+
+FitResult fit(const Stack& cal, const Stack& test, const std::vector<std::string>& effects) {
+  const LeastSquares ls(design(cal, effects));
+  return fit_result(cal, test, effects, ls.solve(cal.y), ls.rank());
 }
 
 // Upper tail of χ²_ν / ν as F(ν, ∞) (the F routine's incomplete beta).
@@ -527,6 +532,12 @@ double DiagnosisRun::required_gain(const FitResult& f) const {
 std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
   const double cp_variance =
       noise_known ? sigma_mm * sigma_mm : current.rss / double(std::max<Index>(1, n_cal - current.rank));
+  // The current model's design, factorised once per step (it was twice per
+  // candidate): for each candidate's share inside its span, and as the QR
+  // that each candidate's fit appends its columns to.
+  const MatrixXd X = design(cal, accepted);
+  const LeastSquares current_ls(X);
+  const detail::AppendedColumnsLeastSquares with_candidate(X);
   std::vector<EffectTest> tests;
   for (const Effect* e : candidates) {
     if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
@@ -536,7 +547,9 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
     t.step = step;
     std::vector<std::string> with = accepted;
     with.push_back(e->name());
-    const FitResult f = fit(cal, test, with);
+    Index rank = 0;
+    const VectorXd coef = with_candidate.solve(cal.G.at(e->name()), cal.y, rank);
+    const FitResult f = fit_result(cal, test, with, coef, rank);
     const double df1 = double(f.rank - current.rank), df2 = double(n_cal - f.rank);
     t.cp = f.rss / cp_variance + 2.0 * double(f.rank);
     if (df1 > 0 && df2 > 0 && f.rss > 0) {
@@ -545,15 +558,13 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
     }
     // Share of the effect's columns inside the span of the current model.
     {
-      const MatrixXd X = design(cal, accepted);
-      const LeastSquares ls(X);
       const MatrixXd& G = cal.G.at(e->name());
       double sum = 0;
       int counted = 0;
       for (Index j = 0; j < G.cols(); ++j) {
         const double g2 = G.col(j).squaredNorm();
         if (!(g2 > 0)) continue;
-        const VectorXd inside = X * ls.solve(G.col(j));
+        const VectorXd inside = X * current_ls.solve(G.col(j));
         sum += std::min(1.0, inside.squaredNorm() / g2);
         ++counted;
       }

@@ -84,23 +84,12 @@ HybridErrorModel::HybridErrorModel(const HybridGeometry<double>& nominal, const 
     const Vec3d A1 = g_.base_joints.col(i);
     const Vec3d A6 = platform_ref.p + g_.platform_joints.col(i);
     const double len = (A6 - A1).norm();
-    const Vec3d u = (A6 - A1) / len;
-    Vec3d t = u.cross(ez);
-    if (t.norm() < 1e-6) t = ex;  // a vertical leg: any horizontal axis
-    t.normalize();
-    const Vec3d n = u.cross(t);
     c.base = make_pose(Mat3d::Identity(), A1);  // {R_0,i}: at A1i, axes of {R0}
-    const Pose<double> frames[6] = {
-        make_pose(columns(u, t.cross(u), t), A1),  // {R_1,i}: z = t, x = u
-        make_pose(columns(t, -u, n), A1),          // {R_2,i}: z = u × t, x = t
-        make_pose(columns(n, -t, u), A1),          // {R_3,i}: z = u (P), x = u × t
-        make_pose(columns(u, t.cross(u), t), A6),  // {R_4,i}: z = t, x = u
-        make_pose(columns(t, -u, n), A6),          // {R_5,i}: z = u × t, x = t
-        make_pose(columns(t, n, u), A6),           // {R_6,i}: z = u, x = t
-    };
+    const std::array<Pose<double>, 6> frames = ups_reference_frames(A1, A6);
     const double q_ref[6] = {0, 0, len, 0, 0, 0};
-    set_links(c, world, frames, q_ref, frames[5]);  // the chain ends at {R_6,i} (moved)
+    set_links(c, world, frames.data(), q_ref, frames[5]);  // the chain ends at {R_6,i} (moved)
     attach_[static_cast<std::size_t>(i)] = platform_ref.inverse() * frames[5];
+    ups_axes_[static_cast<std::size_t>(i)] = frames[5].R;
     ups_reference_[static_cast<std::size_t>(i)] << 0, 0, len, 0, 0, 0;
     c.first_parameter = next_param;
     next_param += c.parameter_count();
@@ -222,11 +211,12 @@ Closure close_chain(const HybridErrorModel& m, int ci, const double* eta, const 
 
 }  // namespace
 
-bool HybridErrorModel::ups_joints(int i, const HybridPassive<double>& s, Vec6<double>& x) const {
-  const double xu[3] = {s.theta1, s.theta2, s.extension - opt_.up_split};
-  const Pose<double> platform = chain_frames(kUp, Pose<double>(), xu, nullptr).end;
-  x = ups_reference_[static_cast<std::size_t>(i)];
-  return close_chain(*this, i, nullptr, platform * attach_[static_cast<std::size_t>(i)], x).status == Status::Ok;
+bool HybridErrorModel::ups_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const {
+  const std::size_t si = static_cast<std::size_t>(i);
+  Vec6d x;
+  return close_nominal_ups([&](const double* xs) { return chain_frames(i, Pose<double>(), xs, nullptr); },
+                           chains_[si].prismatic, 1, chains_[si].base.p, ups_axes_[si], ups_reference_[si],
+                           platform * attach_[si], x, frames);
 }
 
 HybridActualFkReport HybridErrorModel::actual_fk(const Eigen::Ref<const Eigen::VectorXd>& errors, const Vec6<double>& q,
@@ -320,9 +310,7 @@ Status HybridErrorModel::error_jacobian(const HybridPassive<double>& s, const Ve
   Mat6d JP;
   std::array<HybridChainFrames, 3> ups;
   for (int i = 0; i < kUps; ++i) {
-    Vec6d x;
-    if (!ups_joints(i, s, x)) return Status::NotConverged;
-    ups[static_cast<std::size_t>(i)] = chain_frames(i, Pose<double>(), x.data(), nullptr);
+    if (!ups_frames(i, up.end, ups[static_cast<std::size_t>(i)])) return Status::NotConverged;
     const HybridChainFrames& f = ups[static_cast<std::size_t>(i)];
     const Vec3d u = f.axis[3].R.col(2);  // joint 3 (P) axis
     const Vec3d a6 = f.axis[4].p;        // S centre

@@ -9,24 +9,69 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(X.cols()) {
+namespace {
+
+// Column norms (1 for a zero column): the scaling of every solve here.
+VectorXd column_scale(const MatrixXd& X) {
+  VectorXd scale(X.cols());
   for (Index j = 0; j < X.cols(); ++j) {
     const double n = X.col(j).norm();
-    scale_(j) = n > 0 ? n : 1.0;
+    scale(j) = n > 0 ? n : 1.0;
   }
-  cod_.setThreshold(1e-10);
+  return scale;
+}
+
+constexpr double kRankThreshold = 1e-10;  // relative to the largest pivot
+
+}  // namespace
+
+ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scale(X)) {
+  cod_.setThreshold(kRankThreshold);
   cod_.compute(X * scale_.cwiseInverse().asDiagonal());
 }
 
 VectorXd ScaledLeastSquares::solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
+
+AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X0_(X0), scale0_(column_scale(X0)) {
+  qr0_.compute(X0 * scale0_.cwiseInverse().asDiagonal());
+}
+
+VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y, Index& rank) const {
+  const Index n = X0_.rows(), p0 = X0_.cols(), k = G.cols();
+  if (n < 2 * (p0 + k)) {
+    MatrixXd X(n, p0 + k);
+    X << X0_, G;
+    const ScaledLeastSquares ls(X);
+    rank = ls.rank();
+    return ls.solve(y);
+  }
+  const VectorXd scale_g = column_scale(G);
+  const MatrixXd QtG = qr0_.householderQ().adjoint() * (G * scale_g.cwiseInverse().asDiagonal());
+  const VectorXd Qty = qr0_.householderQ().adjoint() * y;
+  const Eigen::HouseholderQR<MatrixXd> qr2(QtG.bottomRows(n - p0));
+  const VectorXd Q2ty = qr2.householderQ().adjoint() * Qty.tail(n - p0);
+  MatrixXd C = MatrixXd::Zero(p0 + k, p0 + k);
+  C.topLeftCorner(p0, p0) = qr0_.matrixQR().topRows(p0).triangularView<Eigen::Upper>();
+  C.topRightCorner(p0, k) = QtG.topRows(p0);
+  C.bottomRightCorner(k, k) = qr2.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+  VectorXd rhs(p0 + k);
+  rhs << Qty.head(p0), Q2ty.head(k);
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(kRankThreshold);
+  cod.compute(C);
+  rank = cod.rank();
+  VectorXd delta = cod.solve(rhs);
+  delta.head(p0).array() /= scale0_.array();
+  delta.tail(k).array() /= scale_g.array();
+  return delta;
+}
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) { return ScaledLeastSquares(X).solve(y); }
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y, double damping) {
   if (!(damping > 0)) return scaled_least_squares(X, y);
   const Index n = X.rows(), p = X.cols();
-  VectorXd scale(p);
-  for (Index j = 0; j < p; ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
+  const VectorXd scale = column_scale(X);
   MatrixXd A(n + p, p);
   A.topRows(n) = X * scale.cwiseInverse().asDiagonal();
   A.bottomRows(p) = std::sqrt(damping) * MatrixXd::Identity(p, p);

@@ -26,6 +26,27 @@ class ScaledLeastSquares {
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;
 };
 
+// The same least squares for a fixed design X0 extended by a few columns G at
+// a time, min ‖y − [X0, G]·δ‖ (the diagnosis's candidate effects against the
+// current model, issue #13: "adding columns to a QR"). X0·D0⁻¹ = Q·R0 once, by
+// a blocked Householder QR without pivoting; per G only Qᵀ·G·D_G⁻¹ = [G1; G2]
+// and a QR of G2 = Q2·R2, and the rank-revealing decomposition of the small
+// compressed design [[R0, G1], [0, R2]] (p0 + k square). An orthogonal
+// transform of the column-scaled [X0, G]: its column norms, so the pivots,
+// the rank and the minimum-norm solution are ScaledLeastSquares([X0, G])'s,
+// rounding aside. Designs less than twice as tall as wide go that way.
+class AppendedColumnsLeastSquares {
+ public:
+  explicit AppendedColumnsLeastSquares(const Eigen::MatrixXd& X0);
+  // The minimum-norm δ (X0's coefficients first) and the rank of [X0, G].
+  Eigen::VectorXd solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& y, Eigen::Index& rank) const;
+
+ private:
+  Eigen::MatrixXd X0_;
+  Eigen::VectorXd scale0_;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr0_;
+};
+
 // ScaledLeastSquares(X).solve(y): the one solve of every Gauss–Newton step
 // of the base and effect fits, and of the diagnosis's nested fits.
 Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);

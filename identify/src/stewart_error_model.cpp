@@ -26,7 +26,6 @@ Closure close_leg(const StewartErrorModel& m, int i, const double* eta, const Po
 StewartErrorModel::StewartErrorModel(const StewartGeometry<double>& nominal) : g_(nominal) {
   if (!g_.home.finite() || !all_finite(g_.base) || !all_finite(g_.platform))
     throw InputError("stewart error model: non-finite geometry");
-  const Vec3d ex = Vec3d::UnitX(), ez = Vec3d::UnitZ();
   // Reference configuration: the home pose; U and S angles zero there, frames
   // as the hybrid's UPS limbs (docs/hybrid-error-model.md).
   const Pose<double> world;
@@ -41,20 +40,8 @@ StewartErrorModel::StewartErrorModel(const StewartGeometry<double>& nominal) : g
     const Vec3d A6 = g_.home.transform(Vec3d(g_.platform.col(i)));
     const double len = (A6 - A1).norm();
     if (!(len > 0)) throw InputError("stewart error model: zero leg length at home");
-    const Vec3d u = (A6 - A1) / len;
-    Vec3d t = u.cross(ez);
-    if (t.norm() < 1e-6) t = ex;
-    t.normalize();
-    const Vec3d n = u.cross(t);
     c.base = make_pose(Mat3d::Identity(), A1);
-    const Pose<double> frames[6] = {
-        make_pose(columns(u, t.cross(u), t), A1),  // {R_1,i}: z = t
-        make_pose(columns(t, -u, n), A1),          // {R_2,i}: z = u × t
-        make_pose(columns(n, -t, u), A1),          // {R_3,i}: z = u (P)
-        make_pose(columns(u, t.cross(u), t), A6),  // {R_4,i}: z = t
-        make_pose(columns(t, -u, n), A6),          // {R_5,i}: z = u × t
-        make_pose(columns(t, n, u), A6),           // {R_6,i}: z = u
-    };
+    const std::array<Pose<double>, 6> frames = ups_reference_frames(A1, A6);
     const double q_ref[6] = {0, 0, len, 0, 0, 0};
     Pose<double> prev = world * c.base;
     for (int j = 0; j < 6; ++j) {
@@ -63,6 +50,7 @@ StewartErrorModel::StewartErrorModel(const StewartGeometry<double>& nominal) : g
     }
     c.end = prev.inverse() * frames[5];
     attach_[static_cast<std::size_t>(i)] = g_.home.inverse() * frames[5];
+    leg_axes_[static_cast<std::size_t>(i)] = frames[5].R;
     reference_[static_cast<std::size_t>(i)] << 0, 0, len, 0, 0, 0;
     c.first_parameter = next_param;
     next_param += c.parameter_count();
@@ -123,9 +111,11 @@ HybridChainFrames StewartErrorModel::chain_frames(int i, const double* x, const 
   return out;
 }
 
-bool StewartErrorModel::leg_joints(int i, const Pose<double>& platform, Vec6<double>& x) const {
-  x = reference_[static_cast<std::size_t>(i)];
-  return close_leg(*this, i, nullptr, platform * attach_[static_cast<std::size_t>(i)], x).status == Status::Ok;
+bool StewartErrorModel::leg_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const {
+  const std::size_t si = static_cast<std::size_t>(i);
+  Vec6d x;
+  return close_nominal_ups([&](const double* xs) { return chain_frames(i, xs, nullptr); }, chains_[si].prismatic, 1,
+                           chains_[si].base.p, leg_axes_[si], reference_[si], platform * attach_[si], x, frames);
 }
 
 StewartActualFkReport StewartErrorModel::actual_fk(const Eigen::Ref<const Eigen::VectorXd>& errors, const Vec6<double>& q,
@@ -195,10 +185,8 @@ Status StewartErrorModel::error_jacobian(const Pose<double>& platform, Eigen::Ma
   Mat6d J;
   std::array<HybridChainFrames, 6> legs;
   for (int i = 0; i < 6; ++i) {
-    Vec6d x;
-    if (!leg_joints(i, platform, x)) return Status::NotConverged;
     const std::size_t si = static_cast<std::size_t>(i);
-    legs[si] = chain_frames(i, x.data(), nullptr);
+    if (!leg_frames(i, platform, legs[si])) return Status::NotConverged;
     const Vec3d u = legs[si].axis[3].R.col(2);  // P axis
     const Vec3d a6 = legs[si].axis[4].p;        // S centre
     J.block<1, 3>(i, 0) = u.transpose();

@@ -139,9 +139,9 @@ class HybridErrorModel {
   // Frames of chain c at joint values x (nominal when `eta` is null; else
   // `eta` points at the chain's Δη block of Δχ), with parent pose `parent`.
   HybridChainFrames chain_frames(int c, const Pose<double>& parent, const double* x, const double* eta) const;
-  // Nominal joint values of UPS chain i (0–2) closing on the platform pose
-  // (in {R0}) of UP passive s; false if the closure fails.
-  bool ups_joints(int i, const HybridPassive<double>& s, Vec6<double>& x) const;
+  // Frames of nominal UPS chain i (0–2) closed on the platform pose (in {R0});
+  // false if the closure fails.
+  bool ups_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const;
 
  private:
   HybridGeometry<double> g_;
@@ -149,6 +149,7 @@ class HybridErrorModel {
   std::array<HybridChain, 5> chains_{};
   std::array<Pose<double>, 3> attach_{};
   std::array<Vec6<double>, 3> ups_reference_{};  // UPS joint values at the home configuration
+  std::array<Mat3<double>, 3> ups_axes_{};       // UPS reference S axes [t, u × t, u] (closed-form closure)
   std::vector<HybridErrorParameter> params_;
 };
 

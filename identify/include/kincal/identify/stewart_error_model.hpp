@@ -52,8 +52,8 @@ class StewartErrorModel {
   // Frames of leg i (0..5) at joint values x; `eta` points at the leg's Δη
   // block (36 values) or is null for the nominal chain.
   HybridChainFrames chain_frames(int i, const double* x, const double* eta) const;
-  // Nominal joint values of leg i closing on the platform pose; false on failure.
-  bool leg_joints(int i, const Pose<double>& platform, Vec6<double>& x) const;
+  // Frames of nominal leg i closed on the platform pose; false on failure.
+  bool leg_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const;
 
   // Platform pose of the erroneous machine for commands q (physical leg
   // variable = q + length_offset + Δξ): outer Newton on the pose from `guess`,
@@ -72,6 +72,7 @@ class StewartErrorModel {
   std::array<HybridChain, 6> chains_{};
   std::array<Pose<double>, 6> attach_{};
   std::array<Vec6<double>, 6> reference_{};
+  std::array<Mat3<double>, 6> leg_axes_{};  // reference S axes [t, u × t, u] (closed-form closure)
   std::vector<HybridErrorParameter> params_;
 };
 
