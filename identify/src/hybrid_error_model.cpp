@@ -327,26 +327,29 @@ Status HybridErrorModel::error_jacobian(const HybridPassive<double>& s, const Ve
   if (!(lu.rcond() > 1e-12)) return Status::Singular;
   const Mat6d JPinv = lu.inverse();
 
-  if (B.rows() != 6 || B.cols() != kParameterCount) B.resize(6, kParameterCount);
+  // Assembled at its fixed size (6 × 150 on the stack: every block product
+  // below is then of known shape), copied out once.
+  Eigen::Matrix<double, 6, kParameterCount> Bf;
   // B_ξ (Eq. (7)): J_P⁻¹ for the UPS encoders, J_S (Eq. (6)) for the wrist's.
-  B.leftCols<3>() = JPinv.leftCols<3>();
-  for (int k = 0; k < 3; ++k) B.col(3 + k) = joint_twist(wr.axis[static_cast<std::size_t>(k)], false, P);
+  Bf.leftCols<3>() = JPinv.leftCols<3>();
+  for (int k = 0; k < 3; ++k) Bf.col(3 + k) = joint_twist(wr.axis[static_cast<std::size_t>(k)], false, P);
   // B_η: J_P⁻¹·G_P (Eqs. (5), (A-3), (A-4)) and G_S (Eq. ).
   Eigen::Matrix<double, 6, kUpsParams> A;
   for (int i = 0; i < kUps; ++i) {
     chain_error_adjoints(ups[static_cast<std::size_t>(i)], P, A);
     const Eigen::Matrix<double, 1, kUpsParams> G = JP.row(i) * A;  // ŝ_wa,3,iᵀ·A_i
-    B.middleCols<kUpsParams>(chains_[static_cast<std::size_t>(i)].first_parameter).noalias() = JPinv.col(i) * G;
+    Bf.middleCols<kUpsParams>(chains_[static_cast<std::size_t>(i)].first_parameter).noalias() = JPinv.col(i) * G;
   }
   Eigen::Matrix<double, 6, kUpParams> A4;
   chain_error_adjoints(up, P, A4);
   const Eigen::Matrix<double, 3, kUpParams> Gc = Wc * A4;
-  B.middleCols<kUpParams>(chains_[kUp].first_parameter).noalias() = JPinv.rightCols<3>() * Gc;
-  chain_error_adjoints(wr, P, B.middleCols<kWristParams>(chains_[kWrist].first_parameter));
+  Bf.middleCols<kUpParams>(chains_[kUp].first_parameter).noalias() = JPinv.rightCols<3>() * Gc;
+  chain_error_adjoints(wr, P, Bf.middleCols<kWristParams>(chains_[kWrist].first_parameter));
   // Eq. (8): into the workpiece frame {R}.
   const Mat3d& Rw = g_.workpiece_rotation;
-  B.topRows<3>() = (Rw * B.topRows<3>()).eval();
-  B.bottomRows<3>() = (Rw * B.bottomRows<3>()).eval();
+  Bf.topRows<3>() = (Rw * Bf.topRows<3>()).eval();
+  Bf.bottomRows<3>() = (Rw * Bf.bottomRows<3>()).eval();
+  B = Bf;
   return Status::Ok;
 }
 
