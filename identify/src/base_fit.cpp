@@ -249,9 +249,12 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
     n.test = row.role == Role::Test;
     n.r.resize(9);
     for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
-    n.M = gauge_map(g0_, robot_->gauge_radius, predicted);
+    const Eigen::Matrix<double, 9, 6> M = gauge_map(g0_, robot_->gauge_radius, predicted);
+    n.M = M;
     for (Index j = 0; j < p_; ++j) B_kept.col(j) = B.col(cal_.kept[std::size_t(j)]);
-    n.H.noalias() = n.M * B_kept;  // one product, not a matrix–vector product per kept column
+    // One product of known inner size (9 × 6 by 6 × p), not a matrix–vector
+    // product per kept column nor a general GEMM call.
+    n.H.noalias() = M.lazyProduct(B_kept);
     n.effect = *en[k];
     n.joint_map = joint_map;
     base.nodes.push_back(std::move(n));

@@ -123,6 +123,15 @@ Closure close_chain(FramesOf frames_of, const std::array<bool, HybridChain::kMax
   return out;
 }
 
+// The inverse of a 6 × 6 from its LU, column by column: vector solves, where
+// Eigen's inverse() of a fixed 6 × 6 goes through the blocked (allocating)
+// triangular solve for matrices.
+inline Mat6d inverse_of(const Eigen::PartialPivLU<Mat6d>& lu) {
+  Mat6d inv;
+  for (int k = 0; k < 6; ++k) inv.col(k) = lu.solve(Vec6d::Unit(k));
+  return inv;
+}
+
 // The joint frames {R_1,i}..{R_6,i} of a U-P-S limb at its reference
 // configuration (every angle zero, the leg straight from the U centre A1 to the
 // S centre A6; docs/hybrid-error-model.md): U axes t and u × t at A1, P along

@@ -325,7 +325,7 @@ Status HybridErrorModel::error_jacobian(const HybridPassive<double>& s, const Ve
   JP.bottomRows<3>() = Wc;
   const Eigen::PartialPivLU<Mat6d> lu(JP);
   if (!(lu.rcond() > 1e-12)) return Status::Singular;
-  const Mat6d JPinv = lu.inverse();
+  const Mat6d JPinv = inverse_of(lu);
 
   // Assembled at its fixed size (6 × 150 on the stack: every block product
   // below is then of known shape), copied out once.

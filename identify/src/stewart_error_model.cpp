@@ -194,7 +194,7 @@ Status StewartErrorModel::error_jacobian(const Pose<double>& platform, Eigen::Ma
   }
   const Eigen::PartialPivLU<Mat6d> lu(J);
   if (!(lu.rcond() > 1e-12)) return Status::Singular;
-  const Mat6d Jinv = lu.inverse();
+  const Mat6d Jinv = inverse_of(lu);
   if (B.rows() != 6 || B.cols() != kParameterCount) B.resize(6, kParameterCount);
   B.leftCols<6>() = Jinv;
   Eigen::Matrix<double, 6, kLegParameters> A;
