@@ -21,7 +21,7 @@
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"
 
-#include "../identify/src/chain_kinematics.hpp"  // the closed-form limb closure, tested on its own
+#include "../identify/src/families/chain_kinematics.hpp"  // the closed-form limb closure, tested on its own
 
 namespace {
 

@@ -1,4 +1,4 @@
-// The diagnosis report (identify/src/report.cpp): a self-contained HTML file.
+// The diagnosis report (identify/src/diagnose/report.cpp): a self-contained HTML file.
 // Checked on synthetic Diagnosis values, so the report is tested apart from
 // the numbers diagnose() computes: structure (nesting of every tag), no
 // network reference, escaping of data-borne text, and no crash or "nan" on

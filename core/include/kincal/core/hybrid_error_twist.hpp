@@ -1,7 +1,7 @@
 // The hybrid robot's predicted pose error twist $_t = B·Δχ (seed 000 Eq. (8))
 // for the controller: fixed-size, allocation-free, and without forming the
 // 6 × 150 matrix B. It is the same linear map as identify's
-// HybridErrorModel::error_jacobian (identify/src/hybrid_error_model.cpp),
+// HybridErrorModel::error_jacobian (identify/src/families/hybrid_error_model.cpp),
 // evaluated as a weighted sum:
 //
 //   $_t = J_P⁻¹·[ ŝ_wa,iᵀ·(A_i·Δη_i) + Δξ_i  (i = 1..3) ;  W_c·(A_4·Δη_4) ]

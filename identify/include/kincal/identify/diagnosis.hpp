@@ -141,7 +141,7 @@ Diagnosis diagnose(const Robot& robot, const PoseTable& data, const DiagnoseOpti
 // DIAG.json (GUIDE contract keys first, then the details).
 std::string diagnosis_to_json(const Diagnosis& d);
 
-// One self-contained HTML file with inline SVG (identify/src/report.cpp).
+// One self-contained HTML file with inline SVG (identify/src/diagnose/report.cpp).
 std::string diagnosis_report_html(const Diagnosis& d);
 
 }  // namespace kincal::identify

@@ -117,7 +117,7 @@ PoseErrorReport target_residuals(const Robot& nominal, const Eigen::VectorXd& er
                                  const std::vector<Vec3<double>>& targets, const PoseTable& data);
 
 // Rows at a calibration's solution, for the diagnosis and the effect fits
-// (identify/src/base_fit.hpp): per row (commands q, commanded pose, measured
+// (identify/src/effects/base_fit.hpp): per row (commands q, commanded pose, measured
 // targets) the model's pose, the target residual (3k), the measurement map M
 // (3k × 6) and the design rows in the convention's coordinates
 // (3k × free_parameters); nullopt where the model's FK fails.

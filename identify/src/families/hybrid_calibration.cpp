@@ -3,7 +3,7 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 
-#include "least_squares_step.hpp"
+#include "estimate/least_squares_step.hpp"
 
 #include "kincal/identify/outliers.hpp"
 

@@ -1,4 +1,4 @@
-#include "base_fit.hpp"
+#include "effects/base_fit.hpp"
 
 #include <Eigen/QR>
 #include <algorithm>

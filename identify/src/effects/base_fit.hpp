@@ -17,7 +17,7 @@
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
-#include "least_squares_step.hpp"
+#include "estimate/least_squares_step.hpp"
 
 namespace kincal::identify::detail {
 

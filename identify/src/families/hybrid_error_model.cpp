@@ -9,7 +9,7 @@
 
 #include "kincal/identify/input_error.hpp"
 
-#include "chain_kinematics.hpp"
+#include "families/chain_kinematics.hpp"
 
 namespace kincal::identify {
 

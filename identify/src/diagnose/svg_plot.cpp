@@ -1,4 +1,4 @@
-#include "svg_plot.hpp"
+#include "diagnose/svg_plot.hpp"
 
 #include <algorithm>
 #include <array>

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <vector>
 
-#include "json_locator.hpp"
+#include "io/json_locator.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/reference_machines.hpp"
 #include "kincal/identify/input_error.hpp"

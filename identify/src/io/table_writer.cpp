@@ -71,7 +71,7 @@ template <class Machine> Groups groups() {
   if (total != static_cast<int>(table_value_count<Machine>()))
     throw InputError("kincal table: the table layout of core/calibration_table.hpp changed (" +
                      std::to_string(table_value_count<Machine>()) + " values, the writer knows " +
-                     std::to_string(total) + "); update identify/src/table_writer.cpp");
+                     std::to_string(total) + "); update identify/src/io/table_writer.cpp");
   return g;
 }
 

@@ -1,4 +1,4 @@
-#include "json_locator.hpp"
+#include "io/json_locator.hpp"
 
 #include <set>
 

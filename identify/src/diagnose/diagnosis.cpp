@@ -26,8 +26,8 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
-#include "base_fit.hpp"
-#include "least_squares_step.hpp"
+#include "effects/base_fit.hpp"
+#include "estimate/least_squares_step.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <optional>
 
-#include "base_fit.hpp"
+#include "effects/base_fit.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"

@@ -12,7 +12,7 @@
 
 #include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/version.hpp"
-#include "svg_plot.hpp"
+#include "diagnose/svg_plot.hpp"
 
 namespace kincal::identify {
 

@@ -7,7 +7,7 @@
 #include <string_view>
 #include <nlohmann/json.hpp>
 
-#include "json_locator.hpp"
+#include "io/json_locator.hpp"
 #include "kincal/identify/files.hpp"
 
 #include "kincal/identify/input_error.hpp"

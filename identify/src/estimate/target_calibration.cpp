@@ -13,8 +13,8 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/target_measurement.hpp"
-#include "least_squares_step.hpp"
-#include "target_family.hpp"
+#include "estimate/least_squares_step.hpp"
+#include "families/target_family.hpp"
 
 namespace kincal::identify {
 

@@ -1,4 +1,4 @@
-#include "least_squares_step.hpp"
+#include "estimate/least_squares_step.hpp"
 
 #include <Eigen/QR>
 #include <cmath>

@@ -10,7 +10,7 @@
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 #include "kincal/identify/target_measurement.hpp"
-#include "target_family.hpp"
+#include "families/target_family.hpp"
 
 namespace kincal::identify::detail {
 
