@@ -82,6 +82,16 @@ constexpr double kAngleScale = 1000.0;  // mm per rad in closure tests
 constexpr double kClosureTol = 1e-11;   // mm
 constexpr int kMaxIterations = 50;
 
+// What moves a chain's end frame onto its target: (Δp, Δθ) in world axes.
+inline Vec6d closure_twist(const Pose<double>& target, const Pose<double>& end) {
+  Vec6d e;
+  e.head<3>() = target.p - end.p;
+  e.tail<3>() = log_so3(Mat3d(target.R * end.R.transpose()));
+  return e;
+}
+// Its size in one unit: max(|Δp|, 1000 mm·|Δθ|).
+inline double closure_error(const Vec6d& e) { return std::max(e.head<3>().norm(), kAngleScale * e.tail<3>().norm()); }
+
 // Newton on the 6 joint variables x of a limb chain so that its end frame
 // coincides with `target` (all six DOF; an S joint is three revolutes).
 // `frames_of(x)` gives the chain's frames at joint values x; the chain's six
@@ -93,10 +103,8 @@ Closure close_chain(FramesOf frames_of, const std::array<bool, HybridChain::kMax
   double prev = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
     const HybridChainFrames fr = frames_of(x.data());
-    Vec6d e;
-    e.head<3>() = target.p - fr.end.p;
-    e.tail<3>() = log_so3(Mat3d(target.R * fr.end.R.transpose()));
-    const double err = std::max(e.head<3>().norm(), kAngleScale * e.tail<3>().norm());
+    const Vec6d e = closure_twist(target, fr.end);
+    const double err = closure_error(e);
     Mat6d J;
     for (int j = 0; j < 6; ++j)
       J.col(j) = joint_twist(fr.axis[static_cast<std::size_t>(axis_offset + j)], prismatic[static_cast<std::size_t>(j)],
@@ -177,16 +185,15 @@ inline bool nominal_ups_joints(const Vec3d& A1, const Mat3d& E, const Pose<doubl
 // A nominal U-P-S limb closed on `target`: the closed form above, checked by
 // the limb's own frames (`frames_of`), and Newton from `reference` (close_chain)
 // where the check fails (a branch away from the reference configuration).
-// Writes the joint values and their frames; false if neither closes.
+// Writes the limb's frames; false if neither closes.
 template <class FramesOf>
 bool close_nominal_ups(FramesOf frames_of, const std::array<bool, HybridChain::kMaxJoints>& prismatic, int axis_offset,
-                       const Vec3d& A1, const Mat3d& E, const Vec6d& reference, const Pose<double>& target, Vec6d& x,
+                       const Vec3d& A1, const Mat3d& E, const Vec6d& reference, const Pose<double>& target,
                        HybridChainFrames& frames) {
+  Vec6d x;
   if (nominal_ups_joints(A1, E, target, x)) {
     frames = frames_of(x.data());
-    const double error = std::max((target.p - frames.end.p).norm(),
-                                  kAngleScale * log_so3(Mat3d(target.R * frames.end.R.transpose())).norm());
-    if (error < 1e3 * kClosureTol) return true;
+    if (closure_error(closure_twist(target, frames.end)) < 1e3 * kClosureTol) return true;
   }
   x = reference;
   if (close_chain(frames_of, prismatic, axis_offset, target, x).status != Status::Ok) return false;

@@ -213,10 +213,9 @@ Closure close_chain(const HybridErrorModel& m, int ci, const double* eta, const 
 
 bool HybridErrorModel::ups_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const {
   const std::size_t si = static_cast<std::size_t>(i);
-  Vec6d x;
   return close_nominal_ups([&](const double* xs) { return chain_frames(i, Pose<double>(), xs, nullptr); },
                            chains_[si].prismatic, 1, chains_[si].base.p, ups_axes_[si], ups_reference_[si],
-                           platform * attach_[si], x, frames);
+                           platform * attach_[si], frames);
 }
 
 HybridActualFkReport HybridErrorModel::actual_fk(const Eigen::Ref<const Eigen::VectorXd>& errors, const Vec6<double>& q,

@@ -113,9 +113,8 @@ HybridChainFrames StewartErrorModel::chain_frames(int i, const double* x, const 
 
 bool StewartErrorModel::leg_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const {
   const std::size_t si = static_cast<std::size_t>(i);
-  Vec6d x;
   return close_nominal_ups([&](const double* xs) { return chain_frames(i, xs, nullptr); }, chains_[si].prismatic, 1,
-                           chains_[si].base.p, leg_axes_[si], reference_[si], platform * attach_[si], x, frames);
+                           chains_[si].base.p, leg_axes_[si], reference_[si], platform * attach_[si], frames);
 }
 
 StewartActualFkReport StewartErrorModel::actual_fk(const Eigen::Ref<const Eigen::VectorXd>& errors, const Vec6<double>& q,
