@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "effects/base_fit.hpp"
+#include "families/family.hpp"
 #include "estimate/least_squares_step.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
@@ -262,9 +263,9 @@ std::string fmt(double v, int digits = 3) {
   return b;
 }
 
-std::string joint_unit(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? "rad" : "mm"; }
-double joint_display(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? 1e6 : 1e3; }  // µrad / µm
-std::string joint_display_unit(const Robot& robot, int j) { return robot.is_hybrid() && j >= 3 ? "urad" : "um"; }
+std::string joint_unit(const Robot& robot, int j) { return robot.revolute(j) ? "rad" : "mm"; }
+double joint_display(const Robot& robot, int j) { return robot.revolute(j) ? 1e6 : 1e3; }  // µrad / µm
+std::string joint_display_unit(const Robot& robot, int j) { return robot.revolute(j) ? "urad" : "um"; }
 
 }  // namespace
 
@@ -383,12 +384,8 @@ void DiagnosisRun::check_inputs() {
   d.robot = robot.name;
   d.data_file = data.file;
   d.family = robot.family();
-  if (robot.is_stewart() && !data.has_measured && !data.has_targets)
-    throw InputError(data.file, 1, 0,
-                     "needs the measured pose columns mx,my,mz,mrx,mry,mrz or target positions t1x.. to diagnose a "
-                     "6-UPS");
-  if (robot.is_hybrid() && data.target_columns() != 3 && !uses_target_model(robot, data))
-    throw InputError(data.file, 1, 0, "needs the gauge target columns t1x..t3z to diagnose a hybrid");
+  if (const std::string missing = family_of(robot).missing_measurement(robot, data); !missing.empty())
+    throw InputError(data.file, 1, 0, missing);
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
   if (data.has_layer) {
     std::set<long long> layers;
@@ -453,7 +450,8 @@ void DiagnosisRun::set_noise() {
     scale_orientation_rows(base, orientation_factor);
   } else if (options.noise_urad) {
     d.notes.push_back(std::string("--noise-urad ignored: ") +
-                      (robot.is_hybrid() ? "the hybrid's gauge" : "the targets") + " measure positions only");
+                      (uses_target_model(robot, data) ? "the targets" : family_of(robot).own_measurement()) +
+                      " measure positions only");
   }
 }
 
@@ -652,7 +650,7 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
   BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
                                      en, "ols", true);
-  if (robot.is_stewart()) scale_orientation_rows(moved, orientation_factor);
+  scale_orientation_rows(moved, orientation_factor);  // rows of orientation only
   bool same_nodes = moved.nodes.size() == base.nodes.size();
   for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
     same_nodes = moved.nodes[k].row == base.nodes[k].row && moved.nodes[k].r.size() == base.nodes[k].r.size();

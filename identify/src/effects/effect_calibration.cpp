@@ -10,6 +10,8 @@
 #include <optional>
 
 #include "effects/base_fit.hpp"
+#include "estimate/least_squares_step.hpp"
+#include "families/hybrid/hybrid_base_fit.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "families/family.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -16,9 +17,9 @@ std::vector<std::string> numbered(const std::string& prefix, int count) {
   return out;
 }
 
-// Joints a screw drives: the six legs of a 6-UPS, the three UPS limbs of the
-// hybrid (its wrist joints are revolute; a screw lead means nothing there).
-int screw_joint_count(const Robot& robot) { return robot.is_stewart() ? 6 : 3; }
+// Joints a screw drives (Family::screw_joints): the six legs of a 6-UPS, the
+// three UPS limbs of the hybrid.
+int screw_joint_count(const Robot& robot) { return family_of(robot).screw_joints(); }
 
 // The joint-space effects share one shape: the tool twist of joint i's error
 // times a per-node basis value; Δq_i = θ_i · basis_i (core/effects.hpp).
@@ -198,46 +199,22 @@ EffectParameters<double> effect_frame(const Robot& robot) {
   EffectParameters<double> e;
   e.screw_lead = robot.screw_lead;
   e.screw_joints = std::uint8_t((1u << screw_joint_count(robot)) - 1u);
-  if (robot.is_hybrid()) {
-    // Poses are in the workpiece frame {R}: p_R = wR0·(p_0 − o) (hybrid.hpp).
-    const HybridGeometry<double>& g = robot.hybrid();
-    e.load_direction = g.workpiece_rotation * Vec3<double>(0, 0, -1);
-    e.thermal_origin = -(g.workpiece_rotation * g.workpiece_origin);
-  }
+  family_of(robot).set_effect_frame(robot, e);
   return e;
 }
-
-namespace {
-
-// Forward Jacobian (tool twist per unit joint error) at the nominal
-// configuration of a commanded pose; false when the IK fails or it is singular.
-bool forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>& J) {
-  if (robot.is_stewart()) {
-    Mat6<double> Jik;
-    if (stewart_ik(robot.stewart(), pose, q, &Jik) != Status::Ok) return false;
-    J = Jik.inverse();  // q̇ = J_ik·twist (stewart.hpp); the error model's dl columns are J_ik⁻¹
-    return all_finite(J);
-  }
-  const HybridGeometry<double>& g = robot.hybrid();
-  HybridPassive<double> passive;
-  if (hybrid_ik(g, pose, q, nullptr, &passive) != Status::Ok) return false;
-  const Vec3<double> wrist = q.tail<3>() + g.joint_offset.tail<3>();
-  return hybrid_forward_jacobian(g, hybrid_frames(g, passive, wrist), J);
-}
-
-}  // namespace
 
 std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const PoseTable& table) {
   const EffectParameters<double> frame = effect_frame(robot);
   // Nodes of measured rows: the file's joint limits do not apply (joint_limits.hpp).
   const Robot open = without_limits(robot);
+  const Family& family = family_of(open);
   std::vector<std::optional<EffectNode>> nodes(table.rows.size());
   for (std::size_t k = 0; k < table.rows.size(); ++k) {
     const PoseRow& row = table.rows[k];
     EffectNode n;
     n.pose = Pose<double>::from_xyz_rpy(row.commanded);
     Vec6<double> q_ik;
-    if (!forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
+    if (!family.forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
     n.q = row.q ? Vec6<double>(row.q->head<6>()) : q_ik;
     n.inputs.load = static_load_forward(n.joint_twist, frame.load_direction);
     n.temperature = row.temp;

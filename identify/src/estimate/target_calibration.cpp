@@ -14,14 +14,15 @@
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/target_measurement.hpp"
 #include "estimate/least_squares_step.hpp"
-#include "families/target_family.hpp"
+#include "families/family.hpp"
+#include "families/family_errors.hpp"
 
 namespace kincal::identify {
 
 namespace {
 
 using detail::NodeGuess;
-using detail::TargetFamily;
+using detail::FamilyErrors;
 using detail::TargetLayout;
 
 // A rotation's share in a weak combination: 1 rad ≙ 1 m, the size of the
@@ -52,7 +53,7 @@ void require_targets(const Robot& nominal, const PoseTable& data) {
   if (nominal.targets.empty())
     throw InputError(data.file, 1, 0,
                      "the table has target columns t1x..; the robot description needs the targets' nominal positions "
-                     "on the " + std::string(nominal.is_stewart() ? "platform" : "tool") +
+                     "on the " + std::string(nominal.target_body()) +
                          ": add the key `targets` (docs/formats.md)");
   if (int(nominal.targets.size()) != data.target_columns())
     throw InputError(data.file, 1, 0,
@@ -70,10 +71,10 @@ void require_enough_nodes(std::size_t nodes, int free_parameters, const Robot& r
                          std::to_string(free_parameters) + " free parameters measured by " +
                          std::to_string(rows_per_node) + " coordinates per node need at least " +
                          std::to_string(needed) + " (and poses that also turn the " +
-                         (robot.is_stewart() ? "platform" : "tool") + ")");
+                         robot.target_body() + ")");
 }
 
-std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& family, const PoseTable& data) {
+std::vector<TargetNode> target_nodes(const Robot& open, const FamilyErrors& family, const PoseTable& data) {
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
     if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
@@ -90,7 +91,7 @@ std::vector<TargetNode> target_nodes(const Robot& open, const TargetFamily& fami
 }
 
 // The nodes' poses on the nominal machine.
-void nominal_poses(const TargetFamily& family, const PoseTable& data, std::vector<TargetNode>& nodes) {
+void nominal_poses(const FamilyErrors& family, const PoseTable& data, std::vector<TargetNode>& nodes) {
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(family.size());
   Pose<double> pose;
   for (TargetNode& node : nodes)
@@ -114,7 +115,7 @@ Pose<double> registration_of(const std::vector<TargetNode>& nodes, const std::ve
 // The design rows of one pose over the full x (3k × layout.size()): the
 // family's errors through the measurement map (H = M·B, seed 000 Eq. (10)
 // with the targets' M), then the instrument's own columns.
-Eigen::MatrixXd full_design_rows(const TargetFamily& family, const Eigen::VectorXd& errors,
+Eigen::MatrixXd full_design_rows(const FamilyErrors& family, const Eigen::VectorXd& errors,
                                  const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
                                  const Pose<double>& pose, const TargetLayout& layout) {
   const Eigen::Index rows = 3 * layout.targets;
@@ -142,7 +143,7 @@ Eigen::MatrixXd null_space(const Eigen::MatrixXd& C, Eigen::Index columns) {
   return svd.matrixV().rightCols(columns - svd.rank());
 }
 
-std::vector<std::string> full_names(const TargetFamily& family, const TargetLayout& layout) {
+std::vector<std::string> full_names(const FamilyErrors& family, const TargetLayout& layout) {
   std::vector<std::string> names = family.names();
   if (layout.registration)
     for (const char* c : {"reg_x", "reg_y", "reg_z", "reg_rx", "reg_ry", "reg_rz"}) names.push_back(c);
@@ -194,13 +195,13 @@ std::string describe(const WeakCombination& w) {
 bool uses_target_model(const Robot& robot, const PoseTable& data) {
   if (!data.has_targets) return false;
   if (data.in_instrument_frame) return true;
-  return robot.is_stewart() ? !data.has_measured : !robot.targets.empty();
+  return !family_of(robot).reads_own_measurement(robot, data);
 }
 
 TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data, const TargetCalibrationOptions& options) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);  // measured rows: the machine was there (joint_limits.hpp)
-  const std::unique_ptr<TargetFamily> family = detail::target_family(open);
+  const std::unique_ptr<FamilyErrors> family = detail::family_errors(open);
   const TargetLayout layout{family->size(), data.target_columns(), data.in_instrument_frame};
   const Eigen::Index rows = 3 * layout.targets;
 
@@ -313,7 +314,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
                      "the calibration poses do not determine the model from " + std::to_string(layout.targets) +
                          " target(s) (rank " + std::to_string(out.rank) + " of " + std::to_string(p) +
                          "); not determined: " + describe(w) + ". Poses that also turn the " +
-                         (nominal.is_stewart() ? "platform" : "tool") + ", or more targets, separate them");
+                         nominal.target_body() + ", or more targets, separate them");
   }
   const Eigen::MatrixXd covariance =
       out.sigma_mm * out.sigma_mm * NV * s.array().square().inverse().matrix().asDiagonal() * NV.transpose();
@@ -342,7 +343,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
 Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);
-  const std::unique_ptr<TargetFamily> family = detail::target_family(open);
+  const std::unique_ptr<FamilyErrors> family = detail::family_errors(open);
   std::vector<TargetNode> nodes = target_nodes(open, *family, data);
   nominal_poses(*family, data, nodes);
   return registration_of(nodes, nominal.targets);
@@ -350,7 +351,7 @@ Pose<double> nominal_registration(const Robot& nominal, const PoseTable& data) {
 
 std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, const TargetCalibration& c,
                                                        const std::vector<TargetRowInput>& rows) {
-  const std::unique_ptr<TargetFamily> family = detail::target_family(nominal);
+  const std::unique_ptr<FamilyErrors> family = detail::family_errors(nominal);
   const TargetLayout layout{family->size(), int(c.targets.size()), c.instrument_frame};
   std::vector<std::optional<TargetRowModel>> out;
   for (const TargetRowInput& row : rows) {
@@ -383,7 +384,7 @@ PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd&
                                  const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
                                  const PoseTable& data) {
   const Robot nominal = without_limits(nominal_in);
-  const std::unique_ptr<TargetFamily> family = detail::target_family(nominal);
+  const std::unique_ptr<FamilyErrors> family = detail::family_errors(nominal);
   std::vector<PoseErrorRow> rows;
   std::vector<UnevaluatedRow> unevaluated;
   std::size_t skipped = 0;

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "families/family.hpp"
+
 namespace kincal::identify {
 
 namespace {
@@ -47,6 +49,8 @@ Robot without_limits(Robot robot) {
 
 std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTable& data) {
   const Robot open = without_limits(robot);
+  const Family& family = family_of(robot);
+  const std::vector<PassiveLimit> passive = family.passive_limits(robot);
   std::vector<std::string> out;
   for (const PoseRow& r : data.rows) {
     Vec6<double> q;
@@ -60,18 +64,17 @@ std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTabl
     Vec6<double> lo, hi;
     robot.joint_limits(lo, hi);
     for (int i = 0; i < 6; ++i) {
-      const char* unit = robot.is_hybrid() && i >= 3 ? "rad" : "mm";
-      const std::string msg = outside("q" + std::to_string(i + 1), q(i), lo(i), hi(i), unit);
+      const std::string msg = outside("q" + std::to_string(i + 1), q(i), lo(i), hi(i), robot.revolute(i) ? "rad" : "mm");
       if (!msg.empty()) out.push_back(where + msg + tail);
     }
-    if (robot.is_hybrid()) {
-      HybridPassive<double> passive = open.hybrid().home;
-      Vec6<double> q_ik;
-      if (hybrid_ik(open.hybrid(), Pose<double>::from_xyz_rpy(r.commanded), q_ik, nullptr, &passive) == Status::Ok) {
-        const std::string msg = outside("UP extension c", passive.extension, robot.hybrid().min_extension,
-                                        robot.hybrid().max_extension, "mm");
-        if (!msg.empty()) out.push_back(where + msg + tail);
-      }
+    if (passive.empty()) continue;
+    std::vector<double> value(passive.size());
+    Vec6<double> q_ik;
+    if (family.inverse(open, Pose<double>::from_xyz_rpy(r.commanded), q_ik, nullptr, value.data()) != Status::Ok)
+      continue;
+    for (std::size_t k = 0; k < passive.size(); ++k) {
+      const std::string msg = outside(passive[k].name, value[k], passive[k].lo, passive[k].hi, passive[k].unit);
+      if (!msg.empty()) out.push_back(where + msg + tail);
     }
   }
   return out;

@@ -4,6 +4,7 @@
 #include <sstream>
 #include <string>
 
+#include "families/family.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
@@ -65,7 +66,7 @@ CompensationStatus finish(CalibrationTable<Machine>& t, const CalibrationModel& 
 }  // namespace
 
 MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options) {
-  const TableBounds<double> b = robot.is_hybrid() ? default_bounds(robot.hybrid()) : default_bounds(robot.stewart());
+  const TableBounds<double> b = family_of(robot).default_bounds(robot);
   MachineLimits<double> l = limits_from_bounds(b);
   const Vec6<double> bound = options.max_correction ? *options.max_correction : robot.correction_bound();
   for (int i = 0; i < 6; ++i) l.max_correction[i] = bound(i);

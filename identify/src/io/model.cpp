@@ -7,6 +7,7 @@
 #include <string_view>
 #include <nlohmann/json.hpp>
 
+#include "families/family.hpp"
 #include "io/json_locator.hpp"
 #include "kincal/identify/files.hpp"
 
@@ -119,18 +120,6 @@ class ModelReader {
   detail::JsonLocations loc_;
 };
 
-// The hybrid's encoder offsets have two names each: PARAMS.csv's dq1..dq3,
-// dtheta4..dtheta6 and seed 000's source errors dxi_3_1 … dxi_6_4.
-std::string encoder_alias(const std::string& name) {
-  static const char* pairs[][2] = {{"dq1", "dxi_3_1"},     {"dq2", "dxi_3_2"},     {"dq3", "dxi_3_3"},
-                                   {"dtheta4", "dxi_4_4"}, {"dtheta5", "dxi_5_4"}, {"dtheta6", "dxi_6_4"}};
-  for (const auto& p : pairs) {
-    if (name == p[0]) return p[1];
-    if (name == p[1]) return p[0];
-  }
-  return {};
-}
-
 }  // namespace
 
 CalibrationModel parse_model(const std::string& text, const std::string& file) {
@@ -178,8 +167,8 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
       r.fail(at + "/name", "unknown parameter \"" + mp.name + "\" for a " + m.nominal.family() + " robot");
     if (const auto it = seen.find(mp.name); it != seen.end())
       r.fail(at, "parameter \"" + mp.name + "\" is given twice (also entry " + std::to_string(it->second + 1) + ")");
-    if (m.nominal.is_hybrid())
-      if (const auto it = seen.find(encoder_alias(mp.name)); it != seen.end())
+    if (const std::string alias = family_of(m.nominal).alias_of(mp.name); !alias.empty())
+      if (const auto it = seen.find(alias); it != seen.end())
         r.fail(at, "parameter \"" + mp.name + "\" is the same encoder offset as \"" + it->first + "\" (entry " +
                        std::to_string(it->second + 1) + "); give it once");
     seen[mp.name] = k;

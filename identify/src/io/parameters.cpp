@@ -4,75 +4,13 @@
 #include <cmath>
 #include <map>
 
-#include "kincal/core/reference_machines.hpp"
+#include "families/family.hpp"
 #include "kincal/identify/csv.hpp"
-#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
 
 namespace {
-
-const char* const kAxes[3] = {"X", "Y", "Z"};
-const char* const kAxesLower[3] = {"x", "y", "z"};
-
-// seed 001 Table 3: per leg dXBi, dYBi, dZBi, dli, dXPi, dYPi, dZPi (mm).
-std::vector<ParameterSpec> stewart_table() {
-  std::vector<ParameterSpec> t;
-  for (int i = 0; i < 6; ++i) {
-    const std::string leg = std::to_string(i + 1);
-    for (int a = 0; a < 3; ++a)
-      t.push_back({std::string("d") + kAxes[a] + "B" + leg, "mm",
-                   std::string("base hinge B") + leg + " " + kAxesLower[a] + " (base frame)",
-                   [i, a](Robot& r, double v) { r.stewart().base(a, i) += v; }});
-    // The physical leg is the command plus dl (verified against seed 001 Table 4).
-    t.push_back({"dl" + leg, "mm", "leg " + leg + " length offset (physical length = q + dl)",
-                 [i](Robot& r, double v) { r.stewart().length_offset(i) += v; }});
-    for (int a = 0; a < 3; ++a)
-      t.push_back({std::string("d") + kAxes[a] + "P" + leg, "mm",
-                   std::string("platform hinge P") + leg + " " + kAxesLower[a] + " (platform frame)",
-                   [i, a](Robot& r, double v) { r.stewart().platform(a, i) += v; }});
-  }
-  return t;
-}
-
-// Hybrid, first subset of seed 000's source errors: encoder offsets Δξ, the
-// UPS joint centres, and the three wrist lengths. The full 145-error set of
-// seed 000 extends this table.
-std::vector<ParameterSpec> hybrid_table() {
-  std::vector<ParameterSpec> t;
-  for (int i = 0; i < 3; ++i)
-    t.push_back({"dq" + std::to_string(i + 1), "mm", "encoder offset of UPS limb " + std::to_string(i + 1),
-                 [i](Robot& r, double v) { r.hybrid().joint_offset(i) += v; }});
-  for (int i = 3; i < 6; ++i)
-    t.push_back({"dtheta" + std::to_string(i + 1), "rad", "encoder offset of wrist joint " + std::to_string(i + 1),
-                 [i](Robot& r, double v) { r.hybrid().joint_offset(i) += v; }});
-  for (int i = 0; i < 3; ++i)
-    for (int a = 0; a < 3; ++a)
-      t.push_back({std::string("d") + kAxes[a] + "A" + std::to_string(i + 1), "mm",
-                   std::string("UPS base joint A1,") + std::to_string(i + 1) + " " + kAxesLower[a] + " (base frame)",
-                   [i, a](Robot& r, double v) { r.hybrid().base_joints(a, i) += v; }});
-  for (int i = 0; i < 3; ++i)
-    for (int a = 0; a < 3; ++a)
-      t.push_back({std::string("d") + kAxes[a] + "a" + std::to_string(i + 1), "mm",
-                   std::string("UPS platform joint a") + std::to_string(i + 1) + " " + kAxesLower[a] +
-                       " (platform frame)",
-                   [i, a](Robot& r, double v) { r.hybrid().platform_joints(a, i) += v; }});
-  t.push_back({"d_platform_to_wrist", "mm", "|A64 Q|", [](Robot& r, double v) { r.hybrid().platform_to_wrist += v; }});
-  t.push_back({"d_wrist_link", "mm", "|Q P0|", [](Robot& r, double v) { r.hybrid().wrist_link += v; }});
-  t.push_back({"d_tool_length", "mm", "|P0 P|", [](Robot& r, double v) { r.hybrid().tool_length += v; }});
-  // seed 000's complete set of joint/link source errors (Appendix A), acting on
-  // the machine through the nonlinear chain model of hybrid_error_model.hpp.
-  const HybridErrorModel model(make_hybrid_seed000<double>());
-  for (const HybridErrorParameter& p : model.parameters()) {
-    const int index = model.index_of(p.name);
-    t.push_back({p.name, p.unit(), "seed 000 source error " + p.symbol, [index](Robot& r, double v) {
-                   if (r.source_errors.size() == 0) r.source_errors = Eigen::VectorXd::Zero(HybridErrorModel::kParameterCount);
-                   r.source_errors(index) += v;
-                 }});
-  }
-  return t;
-}
 
 std::string join(const std::vector<std::string>& items) {
   std::string out;
@@ -88,11 +26,7 @@ const ParameterSpec* find_spec(const Robot& robot, const std::string& name) {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) {
-  static const std::vector<ParameterSpec> stewart = stewart_table();
-  static const std::vector<ParameterSpec> hybrid = hybrid_table();
-  return robot.is_stewart() ? stewart : hybrid;
-}
+const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) { return family_of(robot).parameter_specs(); }
 
 std::vector<std::string> parameter_names(const Robot& robot) {
   std::vector<std::string> out;

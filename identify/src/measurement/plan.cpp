@@ -17,6 +17,8 @@
 #include <random>
 #include <sstream>
 
+#include "families/family.hpp"
+#include "families/family_errors.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
@@ -61,17 +63,12 @@ struct Candidate {
 
 class Workspace {
  public:
-  Workspace(const Robot& robot, const PlanOptions& o) : robot_(robot), margin_(o.margin) {
+  Workspace(const Robot& robot, const PlanOptions& o)
+      : family_(family_of(robot)), open_(without_limits(robot)), margin_(o.margin) {
     // The IK runs without the file's limits (joint_limits.hpp); they are
     // checked here, less the margin.
-    if (robot.is_stewart())
-      open_stewart_ = without_limits(robot.stewart());
-    else
-      open_hybrid_ = without_limits(robot.hybrid());
     Vec6<double> lo, hi;
     robot.joint_limits(lo, hi);
-    const double ext_lo = robot.is_hybrid() ? robot.hybrid().min_extension : 0.0;
-    const double ext_hi = robot.is_hybrid() ? robot.hybrid().max_extension : 0.0;
     for (int i = 0; i < 6; ++i) {
       const double range = hi(i) - lo(i);
       bounded_[i] = range < kUnbounded;
@@ -79,9 +76,14 @@ class Workspace {
       hi_(i) = bounded_[i] ? hi(i) - margin_ * range : hi(i);
       range_(i) = bounded_[i] ? range : 0.0;
     }
-    ext_bounded_ = robot.is_hybrid() && ext_hi - ext_lo < kUnbounded;
-    ext_lo_ = ext_bounded_ ? ext_lo + margin_ * (ext_hi - ext_lo) : ext_lo;
-    ext_hi_ = ext_bounded_ ? ext_hi - margin_ * (ext_hi - ext_lo) : ext_hi;
+    // The passive joints the description bounds (the hybrid's UP extension).
+    for (PassiveLimit p : family_.passive_limits(robot)) {
+      if (!(p.hi - p.lo < kUnbounded)) continue;
+      const double range = p.hi - p.lo;
+      p.lo += margin_ * range;
+      p.hi -= margin_ * range;
+      passive_.push_back(p);
+    }
     Vec6<double> q;
     std::string why;
     home_condition_ = std::numeric_limits<double>::infinity();  // no bound while measuring home itself
@@ -105,15 +107,8 @@ class Workspace {
   bool check(const Pose<double>& pose, Vec6<double>& q, std::string* why, double* condition) const {
     // The IK without its Jacobian first: most sampled poses fail the limits,
     // and that needs only the joints.
-    double extension = 0;
-    Status s;
-    if (robot_.is_stewart()) {
-      s = stewart_ik(open_stewart_, pose, q);
-    } else {
-      HybridPassive<double> passive;
-      s = hybrid_ik(open_hybrid_, pose, q, nullptr, &passive);
-      extension = passive.extension;
-    }
+    std::array<double, 4> passive{};  // the family's passive joints (passive_limits)
+    Status s = family_.inverse(open_, pose, q, nullptr, passive.data());
     if (s != Status::Ok) {
       if (why) *why = std::string("IK: ") + to_string(s);
       return false;
@@ -124,15 +119,17 @@ class Workspace {
               fixed(hi_(i), 3) + "] (the limits less a margin of " + fixed(100 * margin_, 1) + " %)";
         return false;
       }
-    if (ext_bounded_ && (extension < ext_lo_ || extension > ext_hi_)) {
-      if (why) *why = "UP extension " + fixed(extension, 3) + " mm outside [" + fixed(ext_lo_, 3) + ", " + fixed(ext_hi_, 3) +
-            "] (the limits less the margin)";
+    for (std::size_t k = 0; k < passive_.size(); ++k) {
+      const PassiveLimit& p = passive_[k];
+      if (passive[k] >= p.lo && passive[k] <= p.hi) continue;
+      if (why) *why = p.name + " = " + fixed(passive[k], 3) + " " + p.unit + " outside [" +
+            fixed(p.lo, 3) + ", " + fixed(p.hi, 3) + "] (the limits less the margin)";
       return false;
     }
     Mat6<double> J;
     Vec6<double> q_again;
-    const double L = robot_.is_stewart() ? open_stewart_.characteristic_length : open_hybrid_.characteristic_length;
-    s = robot_.is_stewart() ? stewart_ik(open_stewart_, pose, q_again, &J) : hybrid_ik(open_hybrid_, pose, q_again, &J);
+    const double L = family_.characteristic_length(open_);
+    s = family_.inverse(open_, pose, q_again, &J);
     if (s != Status::Ok) {
       if (why) *why = std::string("IK: ") + to_string(s);
       return false;
@@ -152,14 +149,12 @@ class Workspace {
     return true;
   }
 
-  const Robot& robot_;
-  StewartGeometry<double> open_stewart_;  // the geometry with its limits opened
-  HybridGeometry<double> open_hybrid_;
+  const Family& family_;
+  Robot open_;  // the robot with its limits opened
   double margin_;
   Vec6<double> lo_, hi_, range_;
   std::array<bool, 6> bounded_{};
-  bool ext_bounded_ = false;
-  double ext_lo_ = 0, ext_hi_ = 0;
+  std::vector<PassiveLimit> passive_;  // bounded passive joints, less the margin
   double home_condition_ = 1, condition_limit_ = std::numeric_limits<double>::infinity();
 };
 
@@ -174,16 +169,18 @@ class DesignRows {
   DesignRows(const Robot& robot, const PlanOptions& o, std::vector<std::string>& notes) : robot_(robot) {
     frame_ = effect_frame(robot);
     PlanMeasure m = o.measure;
-    if (m == PlanMeasure::Default) m = robot.is_stewart() ? PlanMeasure::Pose : PlanMeasure::Targets;
+    const Family& family = family_of(robot);
+    // The family's own instrument: the full pose, or its targets (the hybrid's gauge).
+    if (m == PlanMeasure::Default) m = family.own_target_count() > 0 ? PlanMeasure::Targets : PlanMeasure::Pose;
     pose_measure_ = m == PlanMeasure::Pose;
     sigma_mm_ = o.noise_mm;
     sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
     if (pose_measure_) {
       rows_ = 6;
       measure_ = "the full pose (x, y, z, rx, ry, rz)";
-      if (robot.is_hybrid())
-        notes.push_back("kincal identify reads the hybrid's gauge targets (t1..t3), not full poses; this plan's "
-                        "numbers are for a full-pose instrument");
+      if (family.own_target_count() > 0)
+        notes.push_back(std::string("kincal identify reads ") + family.own_measurement() +
+                        " targets (t1..t3), not full poses; this plan's numbers are for a full-pose instrument");
     } else if (!robot.targets.empty()) {
       rows_ = 3 * Index(robot.targets.size());
       measure_ = std::to_string(robot.targets.size()) + " target position" + (robot.targets.size() > 1 ? "s" : "") +
@@ -191,48 +188,32 @@ class DesignRows {
       notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "
                       "it); with identify --instrument-frame the tracker's registration is identified as well, and "
                       "the frames are then the weakest part (docs/identify.md \"Laser-tracker targets\")");
-    } else if (robot.is_hybrid()) {
-      rows_ = 9;
-      gauge_ = true;
-      measure_ = "seed 000's three-target gauge (t1..t3, radius " + fixed(robot.gauge_radius, 1) + " mm)";
+    } else if (family.own_target_count() > 0) {
+      rows_ = 3 * family.own_target_count();
+      own_targets_ = true;
+      measure_ = family.own_targets_description(robot);
     } else {
       throw InputError(robot.name, 0, 0,
-                       "--measure targets needs the target positions on the platform: add the key `targets` "
-                       "(1 to 3 points [x, y, z], mm, platform frame) to the robot description");
+                       std::string("--measure targets needs the target positions on the ") + robot.target_body() +
+                           ": add the key `targets` (1 to 3 points [x, y, z], mm, " + robot.target_body() +
+                           " frame) to the robot description");
     }
-    if (robot.is_stewart()) {
-      for (int leg = 1; leg <= 6; ++leg)
-        for (const char* n : {"dXB", "dYB", "dZB", "dl", "dXP", "dYP", "dZP"}) {
-          names_.push_back(n + std::to_string(leg));
-          units_.push_back("mm");
-        }
-    } else {
-      hybrid_ = std::make_shared<HybridErrorModel>(robot.hybrid());
-      for (const HybridErrorParameter& e : hybrid_->parameters()) {
-        kept_.push_back(Index(kept_.size()));
-        names_.push_back(e.name);
-        units_.push_back(e.unit());
-      }
-    }
+    errors_ = detail::family_errors(robot);
+    names_ = errors_->names();
+    units_ = errors_->units();
+    kept_.resize(names_.size());
+    std::iota(kept_.begin(), kept_.end(), Index(0));
   }
 
-  // The hybrid's base columns: the source errors any pose of the pool can
-  // identify (seed 000 Section 4.1's column selection at calibrate_hybrid's
-  // tolerance), encoders first, from the whitened design rows `H` of some
-  // pool poses over the current base columns (all 150 before the first
-  // selection). Returns the positions of the kept columns among the current
-  // ones; rows() gives only those from then on.
-  std::vector<Index> select_hybrid_columns(const MatrixXd& H) {
-    std::vector<Index> xi(HybridErrorModel::kEncoderCount), eta;
-    std::iota(xi.begin(), xi.end(), 0);
-    // A column of rounding (a source error no pose moves the targets by)
-    // has a direction but no size; unit-norm column selection would keep it.
-    const double largest = H.colwise().norm().maxCoeff();
-    for (Index j = HybridErrorModel::kEncoderCount; j < H.cols(); ++j)
-      if (H.col(j).norm() > 1e-9 * largest) eta.push_back(j);
-    const std::vector<std::string> base(names_.begin(), names_.begin() + H.cols());
-    std::vector<Index> keep = reconstruct_by_column_selection(H, xi, eta, base, 1e-4).kept;
-    std::sort(keep.begin(), keep.end());
+  // The base columns when the family's parameters outnumber what poses
+  // determine (FamilyErrors::identifiable_columns: the hybrid's seed 000
+  // Section 4.1 selection), from the whitened design rows `H` of some pool
+  // poses over the current base columns (all before the first selection).
+  // Returns the positions of the kept columns among the current ones; rows()
+  // gives only those from then on.
+  bool selects_columns() const { return errors_->selects_columns(); }
+  std::vector<Index> select_columns(const MatrixXd& H) {
+    const std::vector<Index> keep = errors_->identifiable_columns(H);
     std::vector<Index> kept;
     std::vector<std::string> names, units;
     for (Index j : keep) {
@@ -258,7 +239,7 @@ class DesignRows {
   }
 
   Index rows_per_pose() const { return rows_; }
-  Index base_parameters() const { return robot_.is_stewart() ? kStewartParameterCount : Index(kept_.size()); }
+  Index base_parameters() const { return Index(kept_.size()); }
   Index parameters() const { return Index(names_.size()); }
   const std::vector<std::string>& names() const { return names_; }
   const std::vector<std::string>& units() const { return units_; }
@@ -272,13 +253,9 @@ class DesignRows {
             Eigen::Ref<MatrixXd> P) const {
     const Pose<double> pose = Pose<double>::from_xyz_rpy(c.xyzrpy);
     MatrixXd T(6, parameters());  // tool twist per unit parameter
-    if (robot_.is_stewart()) {
-      T.leftCols(kStewartParameterCount) = stewart_error_jacobian(robot_.stewart(), pose);
-    } else {
-      MatrixXd B(6, HybridErrorModel::kParameterCount);
-      if (hybrid_->error_jacobian(pose, B) != Status::Ok) return false;
-      for (std::size_t j = 0; j < kept_.size(); ++j) T.col(Index(j)) = B.col(kept_[j]);
-    }
+    MatrixXd B;
+    if (!errors_->nominal_twist_columns(pose, B)) return false;
+    for (std::size_t j = 0; j < kept_.size(); ++j) T.col(Index(j)) = B.col(kept_[j]);
     Index col = base_parameters();
     for (const Effect* e : effects_) {
       const Index k = Index(e->parameter_names(robot_).size());
@@ -309,12 +286,13 @@ class DesignRows {
   }
 
  private:
-  // Δy = M·twist: I6, the gauge map (seed 000 Eq. (9)), or [I  −[R·t]×] per target.
+  // Δy = M·twist: I6, the family's own targets' map (the gauge: seed 000
+  // Eq. (9)), or [I  −[R·t]×] per target.
   void measurement_map(const Pose<double>& pose, MatrixXd& M) const {
     if (pose_measure_) {
       M = MatrixXd::Identity(6, 6);
-    } else if (gauge_) {
-      M = gauge_map(robot_.hybrid(), robot_.gauge_radius, pose);
+    } else if (own_targets_) {
+      family_of(robot_).own_target_map(robot_, pose, M);
     } else {
       M.resize(rows_, 6);
       for (std::size_t k = 0; k < robot_.targets.size(); ++k) {
@@ -329,12 +307,12 @@ class DesignRows {
 
   const Robot& robot_;
   EffectParameters<double> frame_;
-  bool pose_measure_ = false, gauge_ = false;
+  bool pose_measure_ = false, own_targets_ = false;
   double sigma_mm_ = 0.005, sigma_rad_ = 0.005 / kOrientationLeverMm;
   Index rows_ = 6;
   std::string measure_;
-  std::shared_ptr<HybridErrorModel> hybrid_;
-  std::vector<Index> kept_;
+  std::shared_ptr<const detail::FamilyErrors> errors_;
+  std::vector<Index> kept_;  // the base columns among the family's parameters
   std::vector<const Effect*> effects_;
   std::vector<std::string> names_, units_;
 };
@@ -586,11 +564,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   const Vec6<double> home = robot.home_pose().to_xyz_rpy();
   Vec6<double> reach_lo, reach_hi;
   {
-    double size = 0;
-    if (robot.is_stewart())
-      size = robot.stewart().base.colwise().norm().maxCoeff();
-    else
-      size = robot.hybrid().base_joints.colwise().norm().maxCoeff() + robot.hybrid().tool_length;
+    const double size = family_of(robot).reach(robot);
     for (int d = 0; d < 6; ++d)
       for (int sign : {-1, 1}) {
         double good = 0, bad = d < 3 ? 2 * size : 1.5;
@@ -660,14 +634,14 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   };
   MatrixXd A, P;
   rows_of(pool, A, P);
-  if (robot.is_hybrid() && !pool.empty()) {
+  if (design.selects_columns() && !pool.empty()) {
     // Which of the 150 source errors the workspace can identify, from 200
     // pool poses spread through it; the other columns leave A and P.
     const Index base = design.base_parameters();
     const std::size_t n = std::min<std::size_t>(pool.size(), 200);
     MatrixXd H(Index(n) * r, base);
     for (std::size_t k = 0; k < n; ++k) H.middleRows(Index(k) * r, r) = A.block(Index(k * pool.size() / n) * r, 0, r, base);
-    std::vector<Index> columns = design.select_hybrid_columns(H);
+    std::vector<Index> columns = design.select_columns(H);
     for (Index j = base; j < A.cols(); ++j) columns.push_back(j);
     A = MatrixXd(A(Eigen::all, columns));
     P = MatrixXd(P(Eigen::all, columns));
@@ -911,7 +885,8 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   // one layer of pure translations as seed 000's), shrunk until every node
   // is usable.
   if (o.compare) {
-    const int layers = robot.is_stewart() ? 3 : 1;
+    const HandGrid habit = family_of(robot).hand_grid();
+    const int layers = habit.layers;
     const std::size_t per_layer = (o.count + std::size_t(layers) - 1) / std::size_t(layers);
     const int nx = int(std::ceil(std::sqrt(double(per_layer))));
     const int ny = int((per_layer + std::size_t(nx) - 1) / std::size_t(nx));
@@ -937,7 +912,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
       for (std::size_t k = 0; k < o.count && all_usable; ++k) {
         Candidate c;
         c.xyzrpy = lattice[k * lattice.size() / o.count];
-        if (robot.is_stewart())
+        if (habit.tilted)
           for (int d = 3; d < 6; ++d) c.xyzrpy(d) += tilt(rng);
         all_usable = workspace.usable(c.xyzrpy, c.q);
         if (backlash) c.dir = random_dir();

@@ -4,7 +4,7 @@
 #include <memory>
 #include <random>
 
-#include "kincal/identify/hybrid_error_model.hpp"
+#include "families/family.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -24,57 +24,19 @@ Eigen::Matrix<double, 3, 3> gauge_targets(const HybridGeometry<double>& g, doubl
 
 namespace {
 
-struct RowResult {
-  Status status = Status::Ok;
-  const char* stage = "";
-  Pose<double> pose;
-};
-
-// `sources`: the erroneous machine with seed 000's source errors (hybrid with
-// Robot::source_errors set), or null for the ideal chain of `actual`.
-// `effects`: the machine's physical effects (null: none) with the row's node.
+// The machine's physical effects (null: none) with the row's node.
 struct RowEffects {
   const EffectParameters<double>* parameters = nullptr;
   const EffectNode* node = nullptr;
 };
 
-RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorModel* sources, const PoseRow& row,
-                  const RowEffects& effects) {
-  RowResult out;
-  const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-  Vec6<double> q;
-  if (nominal.is_stewart()) {
-    if (row.q) {
-      q = *row.q;
-    } else {
-      out.status = stewart_ik(nominal.stewart(), commanded, q);
-      out.stage = "inverse kinematics of the commanded pose";
-      if (out.status != Status::Ok) return out;
-    }
-    if (effects.node != nullptr) q += effect_joint_error(*effects.parameters, q, effects.node->inputs);
-    // seed 001 §5.2: the error-free commands drive the error-containing FK.
-    out.status = stewart_fk(actual.stewart(), q, commanded, out.pose).status;
-    out.stage = "forward kinematics of the erroneous machine";
-    if (out.status == Status::Ok && effects.node != nullptr && row.temp)
-      out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
-    return out;
-  }
-  HybridPassive<double> passive = nominal.hybrid().home;
-  Vec6<double> q_ik;
-  const Status ik = hybrid_ik(nominal.hybrid(), commanded, q_ik, nullptr, &passive);
-  if (row.q) {
-    q = *row.q;
-    if (ik != Status::Ok) passive = nominal.hybrid().home;  // no better start available
-  } else {
-    out.status = ik;
-    out.stage = "inverse kinematics of the commanded pose";
-    if (ik != Status::Ok) return out;
-    q = q_ik;
-  }
-  if (effects.node != nullptr) q += effect_joint_error(*effects.parameters, q, effects.node->inputs);
-  out.status = sources != nullptr ? sources->actual_fk(actual.source_errors, q, passive, out.pose).status
-                                  : hybrid_fk(actual.hybrid(), q, passive, out.pose).status;
-  out.stage = "forward kinematics of the erroneous machine";
+// The pose the actual machine reaches for a row, with its effects: the
+// joint-space ones in the commands, the thermal drift on the reached pose.
+ReachedPose run_row(const ActualMachine& machine, const PoseRow& row, const RowEffects& effects) {
+  std::function<Vec6<double>(const Vec6<double>&)> joint_error;
+  if (effects.node != nullptr)
+    joint_error = [&](const Vec6<double>& q) { return effect_joint_error(*effects.parameters, q, effects.node->inputs); };
+  ReachedPose out = machine.reach(row, joint_error);
   if (out.status == Status::Ok && effects.node != nullptr && row.temp)
     out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
   return out;
@@ -84,7 +46,8 @@ RowResult run_row(const Robot& nominal, const Robot& actual, const HybridErrorMo
 
 PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& poses, const SimulateOptions& options,
                    SimulateReport& report, const std::function<void(const std::string&)>& warn) {
-  if (nominal.is_stewart() != actual.is_stewart()) throw InputError("simulate: nominal and actual robot families differ");
+  const Family& family = family_of(nominal);
+  if (&family != &family_of(actual)) throw InputError("simulate: nominal and actual robot families differ");
   if (!(options.noise_mm >= 0) || !std::isfinite(options.noise_mm))
     throw InputError("--noise-mm must be a finite number >= 0");
   if (!(options.noise_rad >= 0) || !std::isfinite(options.noise_rad))
@@ -102,13 +65,12 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     throw InputError("--instrument-frame applies to target measurements (--targets)");
   PoseTable out = poses;
   out.has_measured = !tracker;
-  out.target_count = tracker ? int(options.targets.size()) : nominal.is_hybrid() ? 3 : 0;
+  out.target_count = tracker ? int(options.targets.size()) : family.own_target_count();
   out.has_targets = out.target_count > 0;
   out.has_status = false;
   out.ignored_columns.clear();
   report = SimulateReport{};
-  std::unique_ptr<HybridErrorModel> sources;
-  if (actual.is_hybrid() && actual.source_errors.size() > 0) sources = std::make_unique<HybridErrorModel>(actual.hybrid());
+  const std::unique_ptr<ActualMachine> machine = family.actual_machine(nominal, actual);
   const bool with_effects = !options.effects.empty();
   if (with_effects && options.effects.needs_temperature() && !poses.has_temp)
     throw InputError(poses.file, 1, 0, "the thermal effect needs a temp column (structure temperature, C)");
@@ -122,7 +84,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     row.status = "ok";
     RowEffects effects;
     if (with_effects && effect_node[index]) effects = {&effect_parameters, &*effect_node[index]};
-    const RowResult r = run_row(nominal, actual, sources.get(), row, effects);
+    const ReachedPose r = run_row(*machine, row, effects);
     if (r.status != Status::Ok) {
       row.status = to_string(r.status);
       out.has_status = true;
@@ -148,8 +110,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     for (int k = 0; k < 3; ++k) m(k) += noise(options.noise_mm);
     for (int k = 3; k < 6; ++k) m(k) += noise(options.noise_rad);
     row.measured = m;
-    if (nominal.is_hybrid()) {  // seed 000's gauge
-      Eigen::Matrix<double, 3, 3> t = gauge_targets(actual.hybrid(), actual.gauge_radius, r.pose);
+    if (Eigen::Matrix<double, 3, 3> t; family.own_targets(actual, r.pose, t)) {  // the hybrid's gauge
       for (int k = 0; k < 9; ++k) t.data()[k] += noise(options.noise_mm);
       row.targets = t;
     }

@@ -1,7 +1,8 @@
 // Parameter errors for `kincal simulate --errors PARAMS.csv` (GUIDE
 // "Command-line contract"): `name,value` rows, each adding `value` to one
 // geometric quantity of the nominal robot. The names per family live in one
-// table (parameters.cpp, `kTables`): extending the error set is adding rows.
+// table in the family's folder (Family::parameter_specs,
+// identify/src/families/<family>/): extending the error set is adding rows.
 #pragma once
 
 #include <cstddef>

@@ -72,8 +72,17 @@ struct Robot {
   const HybridGeometry<double>& hybrid() const { return std::get<HybridGeometry<double>>(geometry); }
   HybridGeometry<double>& hybrid() { return std::get<HybridGeometry<double>>(geometry); }
 
-  const char* family() const { return is_stewart() ? kStewartFamily : kHybridFamily; }
+  // What the robot's family answers (identify/src/families/family.hpp; the
+  // switches on is_stewart()/is_hybrid() belong inside a family's folder).
+  // The description's `family` value.
+  const char* family() const;
   static constexpr int joint_count() { return 6; }
+  // Joint j (0-based) is revolute (rad) rather than prismatic (mm).
+  bool revolute(int joint) const;
+  // The body tracker targets sit on: "platform" (6-UPS) or "tool" (hybrid).
+  const char* target_body() const;
+  // How the family's base error model reads in messages.
+  const char* error_model() const;
 
   // The pose the machine starts from (stewart: `home`; hybrid: the reference
   // pose, the origin of the workpiece frame with the tool aligned to it).

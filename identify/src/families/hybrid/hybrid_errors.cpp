@@ -1,62 +1,18 @@
-// The two families' parts of the target fit (target_family.hpp).
-#include <Eigen/SVD>
+// The hybrid's part of the target fit (target_family.hpp).
+#include "families/hybrid/hybrid_family.hpp"
+#include "families/family_errors.hpp"
+#include <algorithm>
+#include <numeric>
 
 #include "kincal/core/hybrid.hpp"
-#include "kincal/core/stewart.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
-#include "kincal/identify/joint_limits.hpp"
-#include "kincal/identify/parameters.hpp"
-#include "kincal/identify/stewart_calibration.hpp"
-#include "kincal/identify/target_measurement.hpp"
-#include "families/target_family.hpp"
 
-namespace kincal::identify::detail {
+namespace kincal::identify {
 
+namespace detail {
 namespace {
-
-// seed 001's 42 errors (per leg dXB dYB dZB dl dXP dYP dZP), the corrected
-// machine's exact FK, and the rigid-motion convention on its joints.
-class StewartTargets final : public TargetFamily {
- public:
-  explicit StewartTargets(const Robot& robot) : robot_(robot), g_(robot.stewart()) {}
-  int size() const override { return kStewartParameterCount; }
-  std::vector<std::string> names() const override {
-    std::vector<std::string> n = parameter_names(robot_);
-    n.resize(kStewartParameterCount);
-    return n;
-  }
-  NodeGuess start(const Pose<double>& commanded) const override { return {commanded, {}}; }
-  bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const override {
-    if (stewart_fk(stewart_with_errors(g_, errors), q, guess.pose, pose).status != Status::Ok) return false;
-    guess.pose = pose;
-    return true;
-  }
-  Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const override {
-    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose);
-  }
-  // A rigid motion of all platform joints (with the targets) changes no
-  // measurement; in the instrument frame neither does one of all base joints
-  // (with the registration): their errors carry no net rigid motion.
-  Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd&) const override {
-    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(layout.registration ? 12 : 6, layout.size());
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> platform = rigid_motion_rows(g_.platform);
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> base = rigid_motion_rows(g_.base);
-    for (int i = 0; i < 6; ++i) {
-      C.block<6, 3>(0, 7 * i + 4) = platform.middleCols<3>(3 * i);
-      if (layout.registration) C.block<6, 3>(6, 7 * i) = base.middleCols<3>(3 * i);
-    }
-    return C;
-  }
-  std::string convention() const override {
-    return "the platform joints' errors (and, in the instrument frame, the base joints') carry no net rigid motion";
-  }
-
- private:
-  Robot robot_;
-  StewartGeometry<double> g_;
-};
 
 // seed 000's 150 source errors as the controller applies them (seed 000
 // Eq. (16), HybridCompensation): the ideal FK with the encoder offsets in the
@@ -69,14 +25,19 @@ class StewartTargets final : public TargetFamily {
 // instrument's columns placed first, so the source errors a registration or
 // a target position absorbs (and those no pose of the data moves) are held
 // at 0.
-class HybridTargets final : public TargetFamily {
+class HybridErrors final : public FamilyErrors {
  public:
-  explicit HybridTargets(const Robot& robot) : g_(robot.hybrid()), model_(g_) {}
+  explicit HybridErrors(const Robot& robot) : g_(robot.hybrid()), model_(g_) {}
   int size() const override { return HybridErrorModel::kParameterCount; }
   std::vector<std::string> names() const override {
     std::vector<std::string> n;
     for (const HybridErrorParameter& p : model_.parameters()) n.push_back(p.name);
     return n;
+  }
+  std::vector<std::string> units() const override {
+    std::vector<std::string> u;
+    for (const HybridErrorParameter& p : model_.parameters()) u.push_back(p.unit());
+    return u;
   }
   NodeGuess start(const Pose<double>& commanded) const override {
     NodeGuess guess{commanded, g_.home};
@@ -102,6 +63,9 @@ class HybridTargets final : public TargetFamily {
     Eigen::MatrixXd B;
     if (model_.error_jacobian(pose, B) != Status::Ok) B = Eigen::MatrixXd::Zero(6, size());
     return B;
+  }
+  bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const override {
+    return model_.error_jacobian(pose, T) == Status::Ok;
   }
   Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd& start) const override {
     // The instrument's columns first (they must be independent: a tool that
@@ -130,6 +94,24 @@ class HybridTargets final : public TargetFamily {
     for (std::size_t r = 0; r < held.size(); ++r) C(Eigen::Index(r), held[r]) = 1.0;
     return C;
   }
+  // The source errors any pose of a plan's pool can identify: seed 000
+  // Section 4.1's column selection at calibrate_hybrid's tolerance, encoders
+  // first.
+  bool selects_columns() const override { return true; }
+  std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& H) const override {
+    std::vector<Eigen::Index> xi(HybridErrorModel::kEncoderCount), eta;
+    std::iota(xi.begin(), xi.end(), 0);
+    // A column of rounding (a source error no pose moves the targets by)
+    // has a direction but no size; unit-norm column selection would keep it.
+    const double largest = H.colwise().norm().maxCoeff();
+    for (Eigen::Index j = HybridErrorModel::kEncoderCount; j < H.cols(); ++j)
+      if (H.col(j).norm() > 1e-9 * largest) eta.push_back(j);
+    std::vector<std::string> base = names();
+    base.resize(std::size_t(H.cols()));
+    std::vector<Eigen::Index> keep = reconstruct_by_column_selection(H, xi, eta, base, 1e-4).kept;
+    std::sort(keep.begin(), keep.end());
+    return keep;
+  }
   std::string convention() const override {
     return "the source errors the registration, the targets' positions or the errors before them absorb are held "
            "at 0 (seed 000 Section 4.1's column selection, instrument first)";
@@ -141,11 +123,10 @@ class HybridTargets final : public TargetFamily {
 };
 
 }  // namespace
+}  // namespace detail
 
-std::unique_ptr<TargetFamily> target_family(const Robot& robot) {
-  const Robot open = without_limits(robot);
-  if (open.is_stewart()) return std::make_unique<StewartTargets>(open);
-  return std::make_unique<HybridTargets>(open);
+std::unique_ptr<detail::FamilyErrors> HybridFamily::errors(const Robot& open) const {
+  return std::make_unique<detail::HybridErrors>(open);
 }
 
-}  // namespace kincal::identify::detail
+}  // namespace kincal::identify

@@ -1,10 +1,14 @@
-// What the laser-tracker target fit (target_calibration.cpp) needs of a
-// machine family, and nothing more (private to identify/; docs/architecture.md):
+// A machine family's error parameters as the family-free fits and plans see
+// them (private to identify/; docs/architecture.md; Family::errors gives
+// them):
 //   (a) the machine's pose for its error parameters and a node's commands,
-//   (b) the pose error twist per error parameter at that pose, and
-//   (c) the convention rows that close what target positions cannot fix.
-// Registration, targets, the descent, rank, covariance, node tests and the
-// residual reports are the fit's, the same for every family.
+//   (b) the pose error twist per error parameter at that pose,
+//   (c) the convention rows that close what target positions cannot fix, and
+//   (d) the columns a pose set can identify at all (kincal plan).
+// The laser-tracker target fit (target_calibration.cpp) runs on (a)–(c):
+// registration, targets, the descent, rank, covariance, node tests and the
+// residual reports are the fit's, the same for every family. kincal plan's
+// design rows are (b) at the nominal machine over (d)'s columns.
 #pragma once
 
 #include <memory>
@@ -36,12 +40,13 @@ struct TargetLayout {
   int size() const { return targets_at() + 3 * targets; }
 };
 
-class TargetFamily {
+class FamilyErrors {
  public:
-  virtual ~TargetFamily() = default;
+  virtual ~FamilyErrors() = default;
   // The family's error parameters (6-UPS: seed 001's 42; hybrid: seed 000's 150).
   virtual int size() const = 0;
   virtual std::vector<std::string> names() const = 0;
+  virtual std::vector<std::string> units() const = 0;  // "mm" or "rad" per parameter
   // The first guess of a node commanded to `commanded` (its nominal IK's
   // passive joints for the hybrid).
   virtual NodeGuess start(const Pose<double>& commanded) const = 0;
@@ -50,14 +55,29 @@ class TargetFamily {
   virtual bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const = 0;
   // (b) The twist (v at the pose's origin, ω; base axes) per error parameter, 6 × size().
   virtual Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const = 0;
+  // (b) at the nominal machine (no errors), for a plan: false where it
+  // cannot be evaluated.
+  virtual bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const = 0;
   // (c) Rows over x (layout.size() columns) the fit holds at zero, given the
   // design over x at the start (nominal machine, starting registration).
   virtual Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd& start_design) const = 0;
   // How the convention reads (the identify line and docs).
   virtual std::string convention() const = 0;
+  // (d) Whether the parameters outnumber what any pose set determines, so
+  // that a plan must choose its columns (the hybrid's 150; the 6-UPS's 42
+  // are all identifiable from full poses).
+  virtual bool selects_columns() const { return false; }
+  // The identifiable columns (positions in H's columns, ascending) from
+  // design rows H over all parameters at some poses.
+  virtual std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& H) const {
+    std::vector<Eigen::Index> all(std::size_t(H.cols()));
+    for (Eigen::Index j = 0; j < H.cols(); ++j) all[std::size_t(j)] = j;
+    return all;
+  }
 };
 
-// The family of `robot` (limits removed: the machine was where it was measured).
-std::unique_ptr<TargetFamily> target_family(const Robot& robot);
+// The error parameters of `robot`'s family (limits removed: the machine was
+// where it was measured).
+std::unique_ptr<FamilyErrors> family_errors(const Robot& robot);
 
 }  // namespace kincal::identify::detail

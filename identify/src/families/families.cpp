@@ -1,0 +1,48 @@
+// The registry of machine families (family.hpp). Adding a family is its
+// folder and one line in kFamilies (docs/architecture.md "Adding a machine
+// family").
+#include "families/family.hpp"
+
+#include "families/hybrid/hybrid_family.hpp"
+#include "families/stewart/stewart_family.hpp"
+#include "families/family_errors.hpp"
+#include "kincal/identify/joint_limits.hpp"
+
+namespace kincal::identify {
+
+namespace {
+
+const StewartFamily kStewart;
+const HybridFamily kHybrid;
+const Family* const kFamilies[] = {&kStewart, &kHybrid};
+
+}  // namespace
+
+const Family& family_of(const Robot& robot) {
+  for (const Family* f : kFamilies)
+    if (f->describes(robot)) return *f;
+  // Robot's variant holds one of the registered families' geometries.
+  return *kFamilies[0];
+}
+
+const Family* family_named(const std::string& name) {
+  for (const Family* f : kFamilies)
+    if (name == f->name()) return f;
+  return nullptr;
+}
+
+std::string family_names() {
+  std::string out;
+  for (const Family* f : kFamilies) out += (out.empty() ? "" : ", ") + std::string(f->name());
+  return out;
+}
+
+namespace detail {
+
+std::unique_ptr<FamilyErrors> family_errors(const Robot& robot) {
+  return family_of(robot).errors(without_limits(robot));
+}
+
+}  // namespace detail
+
+}  // namespace kincal::identify

@@ -1,0 +1,171 @@
+// The family seam (issue #12 item 1; docs/architecture.md "Adding a machine
+// family"): what one machine family gives everything above
+// identify/src/families. A family is one folder (families/stewart,
+// families/hybrid) and one line in families.cpp's registry; the callers
+// (robot descriptions, joint limits, effects, parameters, the target fit,
+// simulate, plan, diagnosis, calibration tables, the CLI) ask the family of
+// their robot instead of switching on it.
+//
+// Private to identify/. Robot keeps its variant of core geometries (core's
+// compile-time machines need the concrete type); family_of() is the one
+// place that maps a Robot to its family.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "kincal/core/calibration_table.hpp"
+#include "kincal/core/effects.hpp"
+#include "kincal/core/pose.hpp"
+#include "kincal/core/status.hpp"
+#include "kincal/identify/csv.hpp"
+#include "kincal/identify/effects.hpp"
+#include "kincal/identify/parameters.hpp"
+#include "kincal/identify/robot.hpp"
+
+namespace kincal::identify {
+
+namespace detail {
+struct BaseModel;
+class DescriptionReader;
+class FamilyErrors;
+}  // namespace detail
+
+// A passive joint the description bounds (the hybrid's UP extension c).
+struct PassiveLimit {
+  std::string name;  // as messages name it, e.g. "UP extension c"
+  const char* unit;
+  double lo, hi;
+};
+
+// How a user lays out a grid of poses by hand on this family (kincal plan's
+// comparison): layers in z, each pose tilted at random within ±5° or not.
+struct HandGrid {
+  int layers = 1;
+  bool tilted = false;
+};
+
+// What a simulated row reaches on the actual machine (simulate.cpp).
+struct ReachedPose {
+  Status status = Status::Ok;
+  const char* stage = "";  // what failed, for the warning
+  Pose<double> pose;
+};
+
+// The actual (erroneous) machine of `kincal simulate`, built once per run.
+class ActualMachine {
+ public:
+  virtual ~ActualMachine() = default;
+  // The pose reached for a row's commands (q, else the nominal IK of the
+  // commanded pose) with `joint_error(q)` added to them (an effect's Δq; may
+  // be empty).
+  virtual ReachedPose reach(const PoseRow& row,
+                            const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const = 0;
+};
+
+class Family {
+ public:
+  virtual ~Family() = default;
+
+  // ---- identity and description file (docs/formats.md "Robot description")
+  // The description's `family` value, e.g. "stewart-6ups".
+  virtual const char* name() const = 0;
+  // Whether `robot` holds this family's geometry.
+  virtual bool describes(const Robot& robot) const = 0;
+  // Reads the family's keys of a description (the common ones are read by
+  // parse_robot); throws InputError at the offending key.
+  virtual Robot parse(const nlohmann::json& doc, const detail::DescriptionReader& reader) const = 0;
+  // Writes the family's keys, in the order docs/formats.md lists them.
+  virtual void write(const Robot& robot, nlohmann::ordered_json& doc) const = 0;
+  // The geometry lines of `kincal robot`.
+  virtual void summarize(const Robot& robot, std::ostream& os) const = 0;
+
+  // ---- joints
+  // Revolute joints are in rad (µrad shown), prismatic ones in mm (µm shown).
+  virtual bool revolute(int joint) const = 0;
+  // Joints 1..n a screw drives (the `cyclic` effect's joints).
+  virtual int screw_joints() const = 0;
+  // The body the tracker targets sit on: "platform" or "tool".
+  virtual const char* target_body() const = 0;
+
+  // ---- nominal kinematics, in the robot's pose frame
+  virtual Pose<double> home_pose(const Robot& robot) const = 0;
+  virtual TableBounds<double> default_bounds(const Robot& robot) const = 0;
+  virtual void joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const = 0;
+  // The passive joints the description bounds (none by default).
+  virtual std::vector<PassiveLimit> passive_limits(const Robot&) const { return {}; }
+  // Nominal IK; J (if given) = ∂q/∂twist; `passive` (if given) receives the
+  // values of passive_limits()'s joints, in their order (at most 4). The robot's limits
+  // apply as core applies them: model measured rows on without_limits().
+  virtual Status inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J = nullptr,
+                         double* passive = nullptr) const = 0;
+  // The tool twist per unit joint error at the nominal configuration of a
+  // commanded pose (and its commands q); false when the IK fails or it is singular.
+  virtual bool forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
+                                Mat6<double>& J) const = 0;
+  // The length (mm) that makes an angle comparable to a displacement in the
+  // IK Jacobian (the geometry's characteristic_length).
+  virtual double characteristic_length(const Robot& robot) const = 0;
+  // A size of the machine (mm) that bounds its reach: plan's search box.
+  virtual double reach(const Robot& robot) const = 0;
+  // The frame core's effects read poses in (effects.hpp's load direction and
+  // thermal origin); the base frame needs nothing.
+  virtual void set_effect_frame(const Robot&, EffectParameters<double>&) const {}
+
+  // ---- the error model
+  // The family's names for simulate --errors and MODEL.json, in table order.
+  virtual const std::vector<ParameterSpec>& parameter_specs() const = 0;
+  // The same error under another name (the hybrid's encoder offsets have
+  // two), else empty.
+  virtual std::string alias_of(const std::string&) const { return {}; }
+  // How the base model reads in messages ("seed 001 42-parameter model").
+  virtual const char* error_model() const = 0;
+  // The family's own pipeline on its own measurement, as a linear problem at
+  // its solution (effects/base_fit.hpp: fit_base documents the arguments).
+  virtual detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
+                                     const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
+                                     bool finish_least_squares, double ridge_k) const = 0;
+
+  // ---- measurement
+  // What the family's own pipeline reads from a table (6-UPS: full poses;
+  // hybrid: seed 000's gauge, when the robot names no targets). Otherwise
+  // target columns go to the target fit (target_calibration.hpp).
+  virtual bool reads_own_measurement(const Robot& robot, const PoseTable& data) const = 0;
+  // What the table lacks for the family's own measurement and for the
+  // target fit alike, as the error message says it; empty when it has enough.
+  virtual std::string missing_measurement(const Robot& robot, const PoseTable& data) const = 0;
+  // The family's own measurement, as messages name it ("the hybrid's gauge").
+  virtual const char* own_measurement() const = 0;
+  // Target columns a table of the family's own measurement carries (the
+  // gauge's three on the hybrid).
+  virtual int own_target_count() const { return 0; }
+  // The actual machine of a simulation (nominal and actual are this family's).
+  virtual std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const = 0;
+  // The own targets' description in a plan ("seed 000's three-target gauge
+  // (t1..t3, radius 50.0 mm)") and their map Δy = M·twist at a pose.
+  virtual std::string own_targets_description(const Robot&) const { return {}; }
+  virtual void own_target_map(const Robot&, const Pose<double>&, Eigen::MatrixXd&) const {}
+  // The grid a user would measure by hand (kincal plan --compare).
+  virtual HandGrid hand_grid() const = 0;
+  // The own measurement's targets (the gauge) at a reached pose, if any.
+  virtual bool own_targets(const Robot&, const Pose<double>&, Eigen::Matrix<double, 3, 3>&) const { return false; }
+  // The target fit's part of the family (target_family.hpp), for a robot
+  // with its limits opened.
+  virtual std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const = 0;
+};
+
+// The family of a robot (every Robot has one).
+const Family& family_of(const Robot& robot);
+// The family a description's `family` value names, or nullptr.
+const Family* family_named(const std::string& name);
+// The registered families' names, for messages ("stewart-6ups, hybrid-3ups-up-3r").
+std::string family_names();
+
+}  // namespace kincal::identify

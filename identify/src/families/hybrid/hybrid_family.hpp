@@ -1,0 +1,56 @@
+// The hybrid 3-UPS/UP + 3R machine (seed 000): the family seam of
+// family.hpp. The error model is seed 000's 150 source errors
+// (hybrid_error_model.hpp), its pipeline the coarse + fine estimate
+// (hybrid_calibration.hpp), its own instrument the three-target gauge.
+#pragma once
+
+#include "families/family.hpp"
+
+namespace kincal::identify {
+
+class HybridFamily final : public Family {
+ public:
+  const char* name() const override { return kHybridFamily; }
+  bool describes(const Robot& robot) const override { return robot.is_hybrid(); }
+  Robot parse(const nlohmann::json& doc, const detail::DescriptionReader& reader) const override;
+  void write(const Robot& robot, nlohmann::ordered_json& doc) const override;
+  void summarize(const Robot& robot, std::ostream& os) const override;
+
+  // The UPS limbs are prismatic and screw-driven; the wrist's three joints
+  // are revolute (a screw lead means nothing there).
+  bool revolute(int joint) const override { return joint >= 3; }
+  int screw_joints() const override { return 3; }
+  const char* target_body() const override { return "tool"; }
+
+  Pose<double> home_pose(const Robot& robot) const override;
+  TableBounds<double> default_bounds(const Robot& robot) const override;
+  void joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const override;
+  std::vector<PassiveLimit> passive_limits(const Robot& robot) const override;
+  Status inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J = nullptr,
+                 double* passive = nullptr) const override;
+  bool forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>& J) const override;
+  double characteristic_length(const Robot& robot) const override { return robot.hybrid().characteristic_length; }
+  double reach(const Robot& robot) const override;
+  void set_effect_frame(const Robot& robot, EffectParameters<double>& e) const override;
+
+  const std::vector<ParameterSpec>& parameter_specs() const override;
+  std::string alias_of(const std::string& name) const override;
+  detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
+                             const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
+                             bool finish_least_squares, double ridge_k) const override;  // hybrid_base_fit.cpp
+  const char* error_model() const override { return "seed 000 source-error model"; }
+
+  bool reads_own_measurement(const Robot& robot, const PoseTable&) const override { return robot.targets.empty(); }
+  int own_target_count() const override { return 3; }
+  std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;
+  const char* own_measurement() const override { return "the hybrid's gauge"; }
+  std::string own_targets_description(const Robot& robot) const override;
+  void own_target_map(const Robot& robot, const Pose<double>& pose, Eigen::MatrixXd& M) const override;
+  // seed 000's layers: one layer of pure translations.
+  HandGrid hand_grid() const override { return {1, false}; }
+  std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const override;
+  bool own_targets(const Robot& actual, const Pose<double>& pose, Eigen::Matrix<double, 3, 3>& targets) const override;
+  std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const override;  // hybrid_errors.cpp
+};
+
+}  // namespace kincal::identify

@@ -1,0 +1,151 @@
+#include "families/stewart/stewart_family.hpp"
+
+#include "families/description_reader.hpp"
+#include "kincal/core/compensation.hpp"
+#include "kincal/core/stewart.hpp"
+
+namespace kincal::identify {
+
+// ---------------------------------------------------------------- description
+
+Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
+  r.object(doc, "",
+           {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
+           {"length_offset", "screw_lead", "max_correction", "targets"});
+  Robot robot;
+  StewartGeometry<double> g;
+  g.base = r.points<6>(doc["base_joints"], "/base_joints");
+  g.platform = r.points<6>(doc["platform_joints"], "/platform_joints");
+  r.range<6>(doc["stroke"], "/stroke", g.min_length, g.max_length);
+  for (int i = 0; i < 6; ++i)
+    if (g.min_length(i) < 0) r.fail("/stroke/min/" + std::to_string(i), "'stroke/min' is a leg length and must not be negative");
+  g.length_offset = doc.contains("length_offset") ? r.vector<6>(doc["length_offset"], "/length_offset") : Vec6<double>::Zero();
+  const nlohmann::json& home = r.object(doc["home"], "/home", {"x", "y", "z", "rx", "ry", "rz"}, {});
+  g.home = Pose<double>::from_xyz_rpy(r.number(home["x"], "/home/x"), r.number(home["y"], "/home/y"),
+                                      r.number(home["z"], "/home/z"), r.angle(home["rx"], "/home/rx"),
+                                      r.angle(home["ry"], "/home/ry"), r.angle(home["rz"], "/home/rz"));
+  r.common_optional(doc, robot);
+  robot.geometry = g;
+  Vec6<double> q;
+  // With the Jacobian: a geometry whose legs cannot hold the platform (six
+  // base joints at one point, collinear platform joints, …) is singular at
+  // every pose, and simulate would otherwise report measured == commanded.
+  Mat6<double> J;
+  const Status s = stewart_ik(g, g.home, q, &J);
+  if (s == Status::Singular)
+    r.fail("/base_joints", "the geometry is singular at its home pose: the legs cannot hold the platform (joints "
+                           "at one point or on one line?)");
+  if (s != Status::Ok) r.fail("/home", std::string("the home pose is not reachable: ") + to_string(s));
+  return robot;
+}
+
+void StewartFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
+  const StewartGeometry<double>& g = robot.stewart();
+  j["base_joints"] = detail::points_json<6>(g.base);
+  j["platform_joints"] = detail::points_json<6>(g.platform);
+  j["stroke"] = {{"min", detail::vector_json<6>(g.min_length)}, {"max", detail::vector_json<6>(g.max_length)}};
+  j["length_offset"] = detail::vector_json<6>(g.length_offset);
+  const Vec6<double> h = g.home.to_xyz_rpy() + Vec6<double>::Zero();
+  j["home"] = {{"x", h(0)}, {"y", h(1)}, {"z", h(2)}, {"rx", h(3)}, {"ry", h(4)}, {"rz", h(5)}};
+}
+
+void StewartFamily::summarize(const Robot& robot, std::ostream& os) const {
+  const StewartGeometry<double>& g = robot.stewart();
+  os << "base joints B_i (mm):\n";
+  for (int i = 0; i < 6; ++i) os << "  " << i + 1 << ": " << g.base.col(i).transpose() << "\n";
+  os << "platform joints P_i (mm, platform frame):\n";
+  for (int i = 0; i < 6; ++i) os << "  " << i + 1 << ": " << g.platform.col(i).transpose() << "\n";
+  os << "stroke q (mm): [" << g.min_length.minCoeff() << ", " << g.max_length.maxCoeff() << "]\n";
+}
+
+// ---------------------------------------------------------------- kinematics
+
+TableBounds<double> StewartFamily::default_bounds(const Robot& robot) const {
+  return kincal::default_bounds(robot.stewart());
+}
+
+void StewartFamily::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
+  lo = robot.stewart().min_length;
+  hi = robot.stewart().max_length;
+}
+
+Status StewartFamily::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
+                              double*) const {
+  return stewart_ik(robot.stewart(), pose, q, J);
+}
+
+bool StewartFamily::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
+                                     Mat6<double>& J) const {
+  Mat6<double> Jik;
+  if (stewart_ik(robot.stewart(), pose, q, &Jik) != Status::Ok) return false;
+  J = Jik.inverse();  // q̇ = J_ik·twist (stewart.hpp); the error model's dl columns are J_ik⁻¹
+  return all_finite(J);
+}
+
+double StewartFamily::reach(const Robot& robot) const { return robot.stewart().base.colwise().norm().maxCoeff(); }
+
+// ---------------------------------------------------------------- error model
+
+namespace {
+
+const char* const kAxes[3] = {"X", "Y", "Z"};
+const char* const kAxesLower[3] = {"x", "y", "z"};
+
+// seed 001 Table 3: per leg dXBi, dYBi, dZBi, dli, dXPi, dYPi, dZPi (mm).
+std::vector<ParameterSpec> stewart_table() {
+  std::vector<ParameterSpec> t;
+  for (int i = 0; i < 6; ++i) {
+    const std::string leg = std::to_string(i + 1);
+    for (int a = 0; a < 3; ++a)
+      t.push_back({std::string("d") + kAxes[a] + "B" + leg, "mm",
+                   std::string("base hinge B") + leg + " " + kAxesLower[a] + " (base frame)",
+                   [i, a](Robot& r, double v) { r.stewart().base(a, i) += v; }});
+    // The physical leg is the command plus dl (verified against seed 001 Table 4).
+    t.push_back({"dl" + leg, "mm", "leg " + leg + " length offset (physical length = q + dl)",
+                 [i](Robot& r, double v) { r.stewart().length_offset(i) += v; }});
+    for (int a = 0; a < 3; ++a)
+      t.push_back({std::string("d") + kAxes[a] + "P" + leg, "mm",
+                   std::string("platform hinge P") + leg + " " + kAxesLower[a] + " (platform frame)",
+                   [i, a](Robot& r, double v) { r.stewart().platform(a, i) += v; }});
+  }
+  return t;
+}
+
+// seed 001 §5.2: the error-free commands drive the error-containing FK.
+class StewartActual final : public ActualMachine {
+ public:
+  StewartActual(const Robot& nominal, const Robot& actual) : nominal_(nominal.stewart()), actual_(actual.stewart()) {}
+  ReachedPose reach(const PoseRow& row,
+                    const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const override {
+    ReachedPose out;
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    Vec6<double> q;
+    if (row.q) {
+      q = *row.q;
+    } else {
+      out.status = stewart_ik(nominal_, commanded, q);
+      out.stage = "inverse kinematics of the commanded pose";
+      if (out.status != Status::Ok) return out;
+    }
+    if (joint_error) q += joint_error(q);
+    out.status = stewart_fk(actual_, q, commanded, out.pose).status;
+    out.stage = "forward kinematics of the erroneous machine";
+    return out;
+  }
+
+ private:
+  StewartGeometry<double> nominal_, actual_;
+};
+
+}  // namespace
+
+const std::vector<ParameterSpec>& StewartFamily::parameter_specs() const {
+  static const std::vector<ParameterSpec> table = stewart_table();
+  return table;
+}
+
+std::unique_ptr<ActualMachine> StewartFamily::actual_machine(const Robot& nominal, const Robot& actual) const {
+  return std::make_unique<StewartActual>(nominal, actual);
+}
+
+}  // namespace kincal::identify
