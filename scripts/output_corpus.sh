@@ -19,7 +19,8 @@ cd "$(dirname "$0")/.."
 if [ "${1:-}" = "--compare" ]; then
   [ $# -eq 3 ] || { echo "usage: $0 --compare BEFORE AFTER" >&2; exit 2; }
   strip() {  # file dir: the file with the corpus folder's name and timings taken out
-    sed -E -e "s|$2|CORPUS|g" -e 's/diagnosis in [0-9.e+-]+ s/diagnosis in T s/' -e 's/"seconds": [0-9.e+-]+/"seconds": T/' "$1"
+    sed -E -e "s|$2|CORPUS|g" -e 's/diagnosis in [0-9.e+-]+ s/diagnosis in T s/' -e 's/"seconds": [0-9.e+-]+/"seconds": T/' \
+      -e 's/swaps\), [0-9.]+ s/swaps), T s/' "$1"
   }
   status=0
   for f in "$2"/*; do
@@ -87,3 +88,56 @@ run hy_identify_effects identify --robot hybrid-seed000 --data "$out/hy_ups_scal
   --out "$out/hy_model_effects.json"
 run hy_diagnose_report diagnose --robot hybrid-seed000 --data "$out/hy_thermal_measured.csv" \
   --json "$out/hy_diagnosis_estimated.json" --report "$out/hy_report.html"
+
+# Laser-tracker targets (the target fit, either family): robot descriptions
+# with `targets`, three in the base frame and one in the tracker's own frame.
+with_targets() {  # robot, targets JSON, out: the description with `targets` added
+  $kincal robot --robot "$1" --out "$3.tmp" > /dev/null
+  { sed -e '$ d' "$3.tmp" | sed -e '$ s/$/,/'; echo "  \"targets\": $2"; echo "}"; } > "$3"
+  rm -f "$3.tmp"
+}
+with_targets stewart-seed001 '[[30, 40, 10], [-35, 20, 15], [5, -45, 12]]' "$out/st_targets3.json"
+with_targets stewart-seed001 '[[30, 40, 10]]' "$out/st_targets1.json"
+with_targets hybrid-seed000 '[[60, 0, 20], [-30, 52, 20], [-30, -52, 20]]' "$out/hy_targets3.json"
+$kincal simulate --robot "$out/st_targets3.json" --poses $st/diagnosis_poses.csv --errors $st/errors.csv \
+  --targets robot --noise-mm 0.005 --seed 5 --out "$out/st_t3_measured.csv"
+run st_t3_identify identify --robot "$out/st_targets3.json" --data "$out/st_t3_measured.csv" \
+  --out "$out/st_t3_model.json" --json "$out/st_t3_summary.json"
+run st_t3_diagnose diagnose --robot "$out/st_targets3.json" --data "$out/st_t3_measured.csv" --noise-um 5 \
+  --json "$out/st_t3_diagnosis.json"
+$kincal simulate --robot "$out/st_targets1.json" --poses $st/diagnosis_poses.csv --errors $st/errors.csv \
+  --targets robot --instrument-frame 1500,200,300,0.1,-0.05,2.0 --noise-mm 0.005 --seed 6 \
+  --out "$out/st_t1_measured.csv"
+run st_t1_identify identify --robot "$out/st_targets1.json" --data "$out/st_t1_measured.csv" --instrument-frame \
+  --out "$out/st_t1_model.json" --json "$out/st_t1_summary.json"
+run st_t1_effects identify --robot "$out/st_targets1.json" --data "$out/st_t1_measured.csv" --instrument-frame \
+  --effects compliance --out "$out/st_t1_model_effects.json"
+$kincal simulate --robot "$out/hy_targets3.json" --poses $hy/diagnosis_poses.csv --errors $hy/errors.csv \
+  --targets robot --instrument-frame 1800,-300,400,0.05,0.1,2.3 --noise-mm 0.005 --seed 7 \
+  --out "$out/hy_t3_measured.csv"
+run hy_t3_identify identify --robot "$out/hy_targets3.json" --data "$out/hy_t3_measured.csv" --instrument-frame \
+  --out "$out/hy_t3_model.json" --json "$out/hy_t3_summary.json"
+run hy_t3_diagnose diagnose --robot "$out/hy_targets3.json" --data "$out/hy_t3_measured.csv" --instrument-frame \
+  --noise-um 5 --json "$out/hy_t3_diagnosis.json"
+
+# Robot summaries and descriptions, and plans (the family seam's kinematics).
+for r in stewart-seed001 hybrid-seed000 examples/robots/large-hexapod.json; do
+  n=$(basename "$r" .json)
+  run "robot_$n" robot --robot "$r"
+  run "robot_${n}_params" robot --robot "$r" --params
+  run "plan_$n" plan --robot "$r" --count 30 --samples 400 --test 4 --quiet --out "$out/plan_$n.csv" \
+    --grid-out "$out/plan_${n}_grid.csv"
+done
+run plan_hybrid_pose plan --robot hybrid-seed000 --count 25 --samples 300 --measure pose --quiet \
+  --out "$out/plan_hybrid_pose.csv"
+run plan_hybrid_scale plan --robot hybrid-seed000 --count 30 --samples 300 --effects scale --margin 0.2 --quiet \
+  --out "$out/plan_hybrid_scale.csv"
+# The hybrid's targets on poses that turn the tool (the plan's; seed 000's
+# layers are translations, which the target fit refuses above).
+$kincal simulate --robot "$out/hy_targets3.json" --poses "$out/plan_hybrid-seed000.csv" --errors $hy/errors.csv \
+  --targets robot --instrument-frame 1800,-300,400,0.05,0.1,2.3 --noise-mm 0.005 --seed 8 \
+  --out "$out/hy_t3_turning_measured.csv"
+run hy_t3_turning_identify identify --robot "$out/hy_targets3.json" --data "$out/hy_t3_turning_measured.csv" \
+  --instrument-frame --out "$out/hy_t3_turning_model.json"
+run hy_t3_turning_diagnose diagnose --robot "$out/hy_targets3.json" --data "$out/hy_t3_turning_measured.csv" \
+  --instrument-frame --json "$out/hy_t3_turning_diagnosis.json"
