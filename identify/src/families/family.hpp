@@ -25,6 +25,7 @@
 #include "kincal/core/effects.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
+#include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -132,6 +133,11 @@ class Family {
   virtual detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
                                      const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
                                      bool finish_least_squares, double ridge_k) const = 0;
+
+  // ---- the controller's table (calibration_table.hpp): the machine part
+  // and the default bounds of the model's table; calibration_table.cpp adds
+  // the effects and the bounds, seals and checks it.
+  virtual AnyCalibrationTable machine_table(const CalibrationModel& model) const = 0;
 
   // ---- measurement
   // What the family's own pipeline reads from a table (6-UPS: full poses;

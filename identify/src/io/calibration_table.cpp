@@ -6,8 +6,6 @@
 
 #include "families/family.hpp"
 #include "kincal/core/compensation.hpp"
-#include "kincal/identify/hybrid_calibration.hpp"
-#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -125,30 +123,12 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
 
 namespace {
 
-StewartCalibrationTable<double> stewart_table(const CalibrationModel& model, const CalibrationTableOptions& options,
-                                              CompensationStatus& status, std::string* why) {
-  if (!model.nominal.is_stewart()) throw InputError("a 6-UPS calibration table needs a model of a 6-UPS robot");
-  const StewartGeometry<double>& nominal = model.nominal.stewart();
-  StewartCalibrationTable<double> t{};
-  t.machine.nominal = to_table(nominal);
-  t.machine.calibrated = to_table(calibrated_robot(model).stewart());  // seed 001: IK of the calibrated geometry
-  t.bounds = default_bounds(nominal);
-  status = finish(t, model, options, why);
-  return t;
-}
-
-HybridCalibrationTable<double> hybrid_table(const CalibrationModel& model, const CalibrationTableOptions& options,
-                                            CompensationStatus& status, std::string* why) {
-  if (!model.nominal.is_hybrid()) throw InputError("a hybrid calibration table needs a model of a hybrid robot");
-  const HybridCompensation c = hybrid_compensation_from_model(model);
-  HybridCalibrationTable<double> t{};
-  t.machine.nominal = to_table(c.nominal);
-  t.machine.up_split = HybridErrorModelOptions().up_split;  // the model B was identified with
-  for (int i = 0; i < 6; ++i) t.machine.encoder_offsets[i] = c.encoder_offsets(i);
-  for (int k = HybridErrorModel::kEncoderCount; k < kHybridSourceErrorCount; ++k)
-    t.machine.source_errors[k] = c.structural.size() > 0 ? c.structural(k) : 0.0;
-  t.bounds = default_bounds(c.nominal);
-  status = finish(t, model, options, why);
+// The family's table (machine and bounds: Family::machine_table), finished:
+// effects and bounds filled, sealed and checked.
+AnyCalibrationTable build_table(const CalibrationModel& model, const CalibrationTableOptions& options,
+                                CompensationStatus& status, std::string* why) {
+  AnyCalibrationTable t = family_of(model.nominal).machine_table(model);
+  std::visit([&](auto& table) { status = finish(table, model, options, why); }, t);
   return t;
 }
 
@@ -156,10 +136,7 @@ HybridCalibrationTable<double> hybrid_table(const CalibrationModel& model, const
 bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& options) {
   CompensationStatus st = CompensationStatus::Ok;
   try {
-    if (model.nominal.is_hybrid())
-      hybrid_table(model, options, st, nullptr);
-    else
-      stewart_table(model, options, st, nullptr);
+    build_table(model, options, st, nullptr);
   } catch (const InputError&) {
     return false;
   }
@@ -211,31 +188,34 @@ bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& opti
 
 }  // namespace
 
-namespace {
-// A table from `build`, or the fault located (throw_table_fault).
-template <class Build>
-auto checked_table(const CalibrationModel& model, const CalibrationTableOptions& options, Build build) {
+AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options) {
   CompensationStatus st = CompensationStatus::Ok;
   std::string why;
-  auto t = build(model, options, st, &why);
+  AnyCalibrationTable t = build_table(model, options, st, &why);
   if (st != CompensationStatus::Ok) throw_table_fault(model, options, why);
   return t;
+}
+
+namespace {
+// The table of `model` as one family's type; `refusal` when the model is of
+// another family.
+template <class Table> Table table_of(const CalibrationModel& model, const CalibrationTableOptions& options,
+                                      const char* family, const char* refusal) {
+  if (std::string(family) != model.nominal.family()) throw InputError(refusal);
+  return std::get<Table>(calibration_table(model, options));
 }
 }  // namespace
 
 StewartCalibrationTable<double> stewart_calibration_table(const CalibrationModel& model,
                                                           const CalibrationTableOptions& options) {
-  return checked_table(model, options, stewart_table);
+  return table_of<StewartCalibrationTable<double>>(model, options, kStewartFamily,
+                                                   "a 6-UPS calibration table needs a model of a 6-UPS robot");
 }
 
 HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& model,
                                                         const CalibrationTableOptions& options) {
-  return checked_table(model, options, hybrid_table);
-}
-
-AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options) {
-  if (model.nominal.is_hybrid()) return hybrid_calibration_table(model, options);
-  return stewart_calibration_table(model, options);
+  return table_of<HybridCalibrationTable<double>>(model, options, kHybridFamily,
+                                                  "a hybrid calibration table needs a model of a hybrid robot");
 }
 
 CompensatedStream compensate_rows(const AnyCalibrationTable& table, const CalibrationModel& model,

@@ -8,6 +8,7 @@
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/reference_machines.hpp"
 #include "kincal/identify/gauge.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/target_calibration.hpp"
@@ -275,6 +276,18 @@ std::string HybridFamily::alias_of(const std::string& name) const {
     if (name == p[1]) return p[0];
   }
   return {};
+}
+
+AnyCalibrationTable HybridFamily::machine_table(const CalibrationModel& model) const {
+  const HybridCompensation c = hybrid_compensation_from_model(model);
+  HybridCalibrationTable<double> t{};
+  t.machine.nominal = to_table(c.nominal);
+  t.machine.up_split = HybridErrorModelOptions().up_split;  // the model B was identified with
+  for (int i = 0; i < 6; ++i) t.machine.encoder_offsets[i] = c.encoder_offsets(i);
+  for (int k = HybridErrorModel::kEncoderCount; k < kHybridSourceErrorCount; ++k)
+    t.machine.source_errors[k] = c.structural.size() > 0 ? c.structural(k) : 0.0;
+  t.bounds = kincal::default_bounds(c.nominal);
+  return t;
 }
 
 std::string HybridFamily::missing_measurement(const Robot& robot, const PoseTable& data) const {

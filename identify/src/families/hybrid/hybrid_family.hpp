@@ -40,6 +40,8 @@ class HybridFamily final : public Family {
                              bool finish_least_squares, double ridge_k) const override;  // hybrid_base_fit.cpp
   const char* error_model() const override { return "seed 000 source-error model"; }
 
+  AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
+
   bool reads_own_measurement(const Robot& robot, const PoseTable&) const override { return robot.targets.empty(); }
   int own_target_count() const override { return 3; }
   std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;

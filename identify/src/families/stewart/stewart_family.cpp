@@ -3,6 +3,7 @@
 #include "families/description_reader.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/stewart.hpp"
+#include "kincal/identify/stewart_calibration.hpp"
 
 namespace kincal::identify {
 
@@ -142,6 +143,15 @@ class StewartActual final : public ActualMachine {
 const std::vector<ParameterSpec>& StewartFamily::parameter_specs() const {
   static const std::vector<ParameterSpec> table = stewart_table();
   return table;
+}
+
+AnyCalibrationTable StewartFamily::machine_table(const CalibrationModel& model) const {
+  const StewartGeometry<double>& nominal = model.nominal.stewart();
+  StewartCalibrationTable<double> t{};
+  t.machine.nominal = to_table(nominal);
+  t.machine.calibrated = to_table(calibrated_robot(model).stewart());  // seed 001: IK of the calibrated geometry
+  t.bounds = kincal::default_bounds(nominal);
+  return t;
 }
 
 std::unique_ptr<ActualMachine> StewartFamily::actual_machine(const Robot& nominal, const Robot& actual) const {

@@ -34,6 +34,8 @@ class StewartFamily final : public Family {
                              bool finish_least_squares, double ridge_k) const override;  // stewart_base_fit.cpp
   const char* error_model() const override { return "seed 001 42-parameter model"; }
 
+  AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
+
   bool reads_own_measurement(const Robot&, const PoseTable& data) const override { return data.has_measured; }
   std::string missing_measurement(const Robot&, const PoseTable& data) const override {
     if (data.has_measured || data.has_targets) return {};
