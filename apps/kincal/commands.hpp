@@ -1,5 +1,6 @@
-// Subcommands that live in their own files (one file per larger command, so
-// main.cpp stays a table of contents). Each returns the process exit status
+// The subcommands, one file each (`*_command.cpp`; cli_support.cpp holds what
+// they share), so main.cpp is the command line alone: parse, delegate, print
+// a failure. Each returns the process exit status
 // and throws identify::InputError for bad input (main prints it as one line).
 #pragma once
 
@@ -23,6 +24,9 @@ namespace kincal_app {
 // (optional sign, digits, point, exponent — no hex, no "", no NaN/Inf) in
 // [lo, hi] (lo excluded if `open_low`), or a decimal integer ≥ lo.
 CLI::Validator decimal(double lo, double hi, bool open_low = false);
+// The strict decimal syntax of decimal() / whole_number(): the whole string,
+// one optional sign, no hex, finite.
+bool strict_decimal(const std::string& text, double& out);
 CLI::Validator whole_number(long long lo);
 // An effect list (`--effects a,b`): known effects, each once.
 std::vector<std::string> effect_list(const std::string& list);
@@ -39,6 +43,25 @@ std::vector<double> number_list(const std::string& text, const std::string& opti
 std::vector<Eigen::Vector3d> target_list(const std::string& text, const std::string& option);
 // A number as `std::ostream <<` writes it (messages).
 std::string number_text(double v);
+
+// `kincal simulate` (simulate_command.cpp): measurements of an erroneous
+// machine (identify/simulate.hpp).
+struct SimulateArgs {
+  std::string robot, poses, out, errors, targets, instrument_frame;
+  std::vector<std::string> effects;
+  double noise_mm = 0, noise_rad = 0;
+  std::uint64_t seed = 1;
+};
+int run_simulate(const SimulateArgs& args);
+
+// `kincal robot` and `kincal errors` (robot_command.cpp).
+int run_robot(const std::string& name, const std::string& out, bool list_params);
+int run_errors(const std::string& data, const std::string& reference, bool per_row);
+
+// `kincal compensate` and `kincal table` (compensate_command.cpp).
+int run_compensate(const std::string& robot_name, const std::string& model_path, const std::string& poses_path,
+                   const std::string& out_path);
+int run_table(const std::string& model_path, const std::string& out_path);
 
 // `kincal identify` (identify_command.cpp): the base model by the family's
 // pipeline (6-UPS: seed 001's iterated LS; hybrid: seed 000's coarse + fine
