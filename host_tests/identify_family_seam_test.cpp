@@ -1,0 +1,219 @@
+// The family seam's contract (identify/src/families/family.hpp), checked on
+// every registered family the same way: what a third family must satisfy
+// before identify, diagnose, simulate and plan can rely on it
+// (docs/architecture.md "Adding a machine family").
+//
+// Independent evidence rather than the families' own code paths:
+// - the forward Jacobian and the error twists against central finite
+//   differences of the family's own nonlinear pose (FamilyErrors::pose);
+// - the description against a write → parse → write round trip;
+// - the simulated machine with no errors against the commanded pose.
+// Robots: the two built-ins and a hexapod of another size (legs 0.6–1.1 m),
+// at home and at poses drawn at random around it (not a grid).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "../identify/src/families/family.hpp"
+#include "../identify/src/families/family_errors.hpp"
+#include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/robot.hpp"
+#include "large_hexapod.hpp"
+
+namespace ki = kincal::identify;
+using kincal::Mat6;
+using kincal::Pose;
+using kincal::Status;
+using kincal::Vec6;
+
+namespace {
+
+ki::Robot robot_named(const std::string& name) {
+  return name == "large-hexapod" ? kincal_test::large_hexapod() : ki::builtin_robot(name);
+}
+
+// Poses around home the nominal IK reaches within the limits: random
+// offsets of up to 5 % of the machine's reach and 0.05 rad.
+std::vector<Pose<double>> poses_around_home(const ki::Robot& robot, int count, unsigned seed) {
+  const ki::Family& family = ki::family_of(robot);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double size = 0.05 * family.reach(robot);
+  Vec6<double> lo, hi;
+  robot.joint_limits(lo, hi);
+  std::vector<Pose<double>> out{robot.home_pose()};
+  for (int tries = 0; tries < 1000 && int(out.size()) < count; ++tries) {
+    Vec6<double> x = robot.home_pose().to_xyz_rpy();
+    for (int d = 0; d < 3; ++d) x(d) += size * unit(rng);
+    for (int d = 3; d < 6; ++d) x(d) += 0.05 * unit(rng);
+    const Pose<double> pose = Pose<double>::from_xyz_rpy(x);
+    Vec6<double> q;
+    if (family.inverse(robot, pose, q) != Status::Ok) continue;
+    if (((q.array() < lo.array()) || (q.array() > hi.array())).any()) continue;
+    out.push_back(pose);
+  }
+  EXPECT_EQ(int(out.size()), count) << "too few reachable poses around home";
+  return out;
+}
+
+// The machine's pose for joint commands q and error values, by the family's
+// own nonlinear model, started from the nominal IK's configuration.
+Pose<double> pose_at(const ki::detail::FamilyErrors& errors, const Pose<double>& commanded, const Vec6<double>& q,
+                     const Eigen::VectorXd& values) {
+  ki::detail::NodeGuess guess = errors.start(commanded);
+  Pose<double> pose;
+  EXPECT_TRUE(errors.pose(values, q, guess, pose));
+  return pose;
+}
+
+class FamilySeam : public ::testing::TestWithParam<std::string> {
+ protected:
+  ki::Robot robot = robot_named(GetParam());
+  const ki::Family& family = ki::family_of(robot);
+};
+
+TEST_P(FamilySeam, TheRegistryFindsTheFamilyByRobotAndByName) {
+  EXPECT_STREQ(family.name(), robot.family());
+  EXPECT_EQ(ki::family_named(family.name()), &family);
+  EXPECT_TRUE(family.describes(robot));
+  EXPECT_EQ(ki::family_named("no-such-family"), nullptr);
+  EXPECT_NE(ki::family_names().find(family.name()), std::string::npos);
+  // Another family's robot is not this family's.
+  const ki::Robot other = robot_named(robot.is_stewart() ? "hybrid-seed000" : "stewart-seed001");
+  EXPECT_FALSE(family.describes(other));
+}
+
+TEST_P(FamilySeam, DescriptionRoundTripsThroughWriteAndParse) {
+  const std::string json = ki::robot_to_json(robot);
+  const ki::Robot again = ki::parse_robot(json, "round-trip.json");
+  EXPECT_EQ(ki::robot_to_json(again), json);
+  EXPECT_EQ(&ki::family_of(again), &family);
+  EXPECT_FALSE(ki::robot_summary(robot).empty());
+}
+
+TEST_P(FamilySeam, HomeIsReachableInsideTheLimits) {
+  Vec6<double> lo, hi, q;
+  family.joint_limits(robot, lo, hi);
+  const std::vector<ki::PassiveLimit> passive_limits = family.passive_limits(robot);
+  ASSERT_LE(passive_limits.size(), 4u);
+  double passive[4] = {0, 0, 0, 0};
+  ASSERT_EQ(family.inverse(robot, family.home_pose(robot), q, nullptr, passive), Status::Ok);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_GE(q(i), lo(i)) << "joint " << i + 1;
+    EXPECT_LE(q(i), hi(i)) << "joint " << i + 1;
+  }
+  for (std::size_t k = 0; k < passive_limits.size(); ++k) {
+    EXPECT_GE(passive[k], passive_limits[k].lo) << passive_limits[k].name;
+    EXPECT_LE(passive[k], passive_limits[k].hi) << passive_limits[k].name;
+  }
+  EXPECT_GT(family.reach(robot), 0.0);
+  EXPECT_GT(family.characteristic_length(robot), 0.0);
+  const kincal::TableBounds<double> bounds = family.default_bounds(robot);
+  for (int i = 0; i < 6; ++i) EXPECT_GT(bounds.max_correction[i], 0.0);
+}
+
+TEST_P(FamilySeam, ForwardJacobianMatchesFiniteDifferencesOfTheFamilysOwnPose) {
+  const std::unique_ptr<ki::detail::FamilyErrors> errors = ki::detail::family_errors(robot);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(errors->size());
+  for (const Pose<double>& commanded : poses_around_home(robot, 5, 11)) {
+    Vec6<double> q;
+    Mat6<double> J;
+    ASSERT_TRUE(family.forward_jacobian(robot, commanded, q, J));
+    for (int i = 0; i < 6; ++i) {
+      const double h = family.revolute(i) ? 1e-6 : 1e-4;  // rad, mm
+      Vec6<double> up = q, down = q;
+      up(i) += h;
+      down(i) -= h;
+      const Vec6<double> fd = kincal::pose_error(pose_at(*errors, commanded, up, zero),
+                                                 pose_at(*errors, commanded, down, zero)) / (2 * h);
+      EXPECT_LT((fd - J.col(i)).norm(), 1e-5 * std::max(1.0, J.col(i).norm())) << "joint " << i + 1;
+    }
+  }
+}
+
+TEST_P(FamilySeam, ErrorTwistsMatchFiniteDifferencesOfTheFamilysOwnPose) {
+  const std::unique_ptr<ki::detail::FamilyErrors> errors = ki::detail::family_errors(robot);
+  const int n = errors->size();
+  ASSERT_EQ(int(errors->names().size()), n);
+  ASSERT_EQ(int(errors->units().size()), n);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  // Every column of the 6-UPS's 42; every 7th of the hybrid's 150 and its
+  // six encoder offsets.
+  std::vector<int> columns;
+  for (int j = 0; j < n; ++j)
+    if (n <= 60 || j < 6 || j % 7 == 0) columns.push_back(j);
+  for (const Pose<double>& commanded : poses_around_home(robot, 3, 5)) {
+    Vec6<double> q;
+    ASSERT_EQ(family.inverse(ki::without_limits(robot), commanded, q), Status::Ok);
+    const Pose<double> reached = pose_at(*errors, commanded, q, zero);
+    const Eigen::MatrixXd T = errors->twist_columns(zero, reached);
+    Eigen::MatrixXd nominal;
+    ASSERT_TRUE(errors->nominal_twist_columns(reached, nominal));
+    EXPECT_LT((nominal - T).norm(), 1e-9 * std::max(1.0, T.norm()));
+    for (int j : columns) {
+      const double h = errors->units()[std::size_t(j)] == "rad" ? 1e-6 : 1e-4;
+      Eigen::VectorXd up = zero, down = zero;
+      up(j) = h;
+      down(j) = -h;
+      const Vec6<double> fd =
+          kincal::pose_error(pose_at(*errors, commanded, q, up), pose_at(*errors, commanded, q, down)) / (2 * h);
+      EXPECT_LT((fd - T.col(j)).norm(), 1e-5 * std::max(1.0, T.col(j).norm())) << errors->names()[std::size_t(j)];
+    }
+    const std::vector<Eigen::Index> kept = errors->identifiable_columns(T);
+    EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+    EXPECT_EQ(std::set<Eigen::Index>(kept.begin(), kept.end()).size(), kept.size());
+    for (Eigen::Index j : kept) EXPECT_TRUE(j >= 0 && j < n);
+    if (!errors->selects_columns()) {
+      EXPECT_EQ(Eigen::Index(kept.size()), n);
+    }
+  }
+}
+
+TEST_P(FamilySeam, ParameterNamesAreUniqueWithUnitsAndSymmetricAliases) {
+  std::set<std::string> names;
+  for (const ki::ParameterSpec& s : family.parameter_specs()) {
+    EXPECT_TRUE(names.insert(s.name).second) << "twice: " << s.name;
+    EXPECT_TRUE(std::string(s.unit) == "mm" || std::string(s.unit) == "rad") << s.name;
+  }
+  for (const std::string& name : names) {
+    const std::string alias = family.alias_of(name);
+    if (alias.empty()) continue;
+    EXPECT_TRUE(names.count(alias)) << name << " -> " << alias;
+    EXPECT_EQ(family.alias_of(alias), name);
+  }
+}
+
+TEST_P(FamilySeam, TheSimulatedMachineWithoutErrorsReachesTheCommandedPose) {
+  const std::unique_ptr<ki::ActualMachine> machine = family.actual_machine(robot, robot);
+  for (const Pose<double>& commanded : poses_around_home(robot, 6, 3)) {
+    ki::PoseRow row;
+    row.commanded = commanded.to_xyz_rpy();
+    const ki::ReachedPose reached = machine->reach(row, {});
+    ASSERT_EQ(reached.status, Status::Ok) << reached.stage;
+    EXPECT_LT(kincal::pose_error(reached.pose, commanded).norm(), 1e-8);
+  }
+}
+
+TEST_P(FamilySeam, AModelWithoutErrorsGivesATableThatPassesItsCheck) {
+  ki::CalibrationModel model;
+  model.nominal = robot;
+  const ki::AnyCalibrationTable table = ki::calibration_table(model);
+  EXPECT_TRUE(std::visit(
+      [&](const auto& t) { return kincal::validate_table(t, ki::machine_limits(robot)) == kincal::CompensationStatus::Ok; },
+      table));
+}
+
+INSTANTIATE_TEST_SUITE_P(RegisteredFamilies, FamilySeam,
+                         ::testing::Values("stewart-seed001", "hybrid-seed000", "large-hexapod"),
+                         [](const ::testing::TestParamInfo<std::string>& param) {
+                           std::string n = param.param;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+}  // namespace
