@@ -7,7 +7,8 @@
 // - the forward Jacobian and the error twists against central finite
 //   differences of the family's own nonlinear pose (FamilyErrors::pose);
 // - the description against a write → parse → write round trip;
-// - the simulated machine with no errors against the commanded pose.
+// - the simulated machine with no errors against the commanded pose;
+// - the measurement model's map against finite differences of its prediction.
 // Robots: the two built-ins and a hexapod of another size (legs 0.6–1.1 m),
 // at home and at poses drawn at random around it (not a grid).
 #include <gtest/gtest.h>
@@ -22,6 +23,7 @@
 #include "../identify/src/families/family_errors.hpp"
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/robot.hpp"
 #include "large_hexapod.hpp"
 
@@ -206,6 +208,43 @@ TEST_P(FamilySeam, AModelWithoutErrorsGivesATableThatPassesItsCheck) {
   EXPECT_TRUE(std::visit(
       [&](const auto& t) { return kincal::validate_table(t, ki::machine_limits(robot)) == kincal::CompensationStatus::Ok; },
       table));
+}
+
+// The measurement model's map against central finite differences of its own
+// prediction along each twist direction (apply_twist), for the tracker's
+// targets seen from a turned and shifted instrument, seed 000's gauge (the
+// hybrid family's own targets) and one target at the tool point; and the
+// full pose's map against pose_error of the twisted pose.
+TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
+  const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
+  const Pose<double> registration = Pose<double>::from_xyz_rpy(1500, -200, 300, 0.1, -0.2, 2.1);
+  const std::optional<ki::MeasurementModel> gauge = ki::family_of(hybrid).own_targets(hybrid);
+  ASSERT_TRUE(gauge.has_value());
+  EXPECT_EQ(gauge->rows(), 9);
+  EXPECT_FALSE(ki::family_of(ki::builtin_robot("stewart-seed001")).own_targets(hybrid).has_value());
+  const std::vector<ki::MeasurementModel> models = {
+      ki::MeasurementModel::targets({{30, 40, 10}}, registration),
+      ki::MeasurementModel::targets({{30, 40, 10}, {-35, 20, 15}, {5, -45, 12}}, registration),
+      ki::MeasurementModel::targets({kincal::Vec3<double>::Zero()}), *gauge};
+  const Pose<double> pose = Pose<double>::from_xyz_rpy(20, -15, 40, 0.05, -0.1, 0.2);
+  for (const ki::MeasurementModel& m : models) {
+    const Eigen::MatrixXd M = m.map(pose);
+    ASSERT_EQ(M.rows(), m.rows());
+    EXPECT_FALSE(m.measures_orientation());
+    for (int i = 0; i < 6; ++i) {
+      const double h = 1e-6;
+      Vec6<double> t = Vec6<double>::Zero();
+      t(i) = h;
+      const Eigen::VectorXd fd = (m.predict(kincal::apply_twist(pose, kincal::Twist<double>(t))) -
+                                  m.predict(kincal::apply_twist(pose, kincal::Twist<double>(-t)))) / (2 * h);
+      EXPECT_LT((fd - M.col(i)).norm(), 1e-6 * std::max(1.0, M.col(i).norm())) << m.describe() << ", twist " << i;
+    }
+    const Eigen::MatrixXd T = Eigen::MatrixXd::Random(6, 4);
+    EXPECT_LT((m.design(pose, T) - M * T).norm(), 1e-12 * (M * T).norm());
+  }
+  const ki::MeasurementModel full = ki::MeasurementModel::full_pose();
+  EXPECT_TRUE(full.measures_orientation());
+  EXPECT_EQ(full.map(pose), Eigen::MatrixXd::Identity(6, 6));
 }
 
 INSTANTIATE_TEST_SUITE_P(RegisteredFamilies, FamilySeam,

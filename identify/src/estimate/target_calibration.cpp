@@ -11,6 +11,7 @@
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/target_measurement.hpp"
 #include "estimate/least_squares_step.hpp"
@@ -120,7 +121,7 @@ Eigen::MatrixXd full_design_rows(const FamilyErrors& family, const Eigen::Vector
                                  const Pose<double>& pose, const TargetLayout& layout) {
   const Eigen::Index rows = 3 * layout.targets;
   Eigen::MatrixXd X(rows, layout.size());
-  X.leftCols(layout.family) = target_map(registration, pose, targets) * family.twist_columns(errors, pose);
+  X.leftCols(layout.family) = MeasurementModel::targets(targets, registration).design(pose, family.twist_columns(errors, pose));
   const Eigen::MatrixXd inst = instrument_columns(registration, pose, targets);
   if (layout.registration) X.middleCols(layout.registration_at(), 6) = inst.leftCols<6>();
   X.middleCols(layout.targets_at(), 3 * layout.targets) = inst.rightCols(3 * layout.targets);
@@ -361,8 +362,9 @@ std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, con
       out.emplace_back();
       continue;
     }
-    m.residual = (row.measured.leftCols(layout.targets) - predicted_targets(c.registration, m.pose, c.targets)).reshaped();
-    m.M = target_map(c.registration, m.pose, c.targets);
+    const MeasurementModel tracker = MeasurementModel::targets(c.targets, c.registration);
+    m.residual = row.measured.leftCols(layout.targets).reshaped() - tracker.predict(m.pose);
+    m.M = tracker.map(m.pose);
     m.H = full_design_rows(*family, c.errors, c.registration, c.targets, m.pose, layout) * c.convention_basis;
     out.emplace_back(std::move(m));
   }

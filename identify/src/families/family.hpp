@@ -28,6 +28,7 @@
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -154,14 +155,11 @@ class Family {
   virtual int own_target_count() const { return 0; }
   // The actual machine of a simulation (nominal and actual are this family's).
   virtual std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const = 0;
-  // The own targets' description in a plan ("seed 000's three-target gauge
-  // (t1..t3, radius 50.0 mm)") and their map Δy = M·twist at a pose.
-  virtual std::string own_targets_description(const Robot&) const { return {}; }
-  virtual void own_target_map(const Robot&, const Pose<double>&, Eigen::MatrixXd&) const {}
+  // The family's own targets (the hybrid's gauge) on `robot`, if it has any:
+  // simulate measures them on the actual machine, plan on the nominal one.
+  virtual std::optional<MeasurementModel> own_targets(const Robot&) const { return std::nullopt; }
   // The grid a user would measure by hand (kincal plan --compare).
   virtual HandGrid hand_grid() const = 0;
-  // The own measurement's targets (the gauge) at a reached pose, if any.
-  virtual bool own_targets(const Robot&, const Pose<double>&, Eigen::Matrix<double, 3, 3>&) const { return false; }
   // The target fit's part of the family (target_family.hpp), for a robot
   // with its limits opened.
   virtual std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const = 0;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/simulate.hpp"
 
 namespace kincal::identify {
@@ -21,18 +22,20 @@ Eigen::Matrix<double, 9, 6> gauge_map(const HybridGeometry<double>& g, double ra
   return M;
 }
 
+// The three kinds are instances of the one measurement model: the gauge, the
+// full pose, and a single target at the tool point P.
+MeasurementModel measurement_model(MeasurementKind kind, const HybridGeometry<double>& g, double radius) {
+  switch (kind) {
+    case MeasurementKind::GaugeTargets: return MeasurementModel::gauge(g, radius);
+    case MeasurementKind::FullPose: return MeasurementModel::full_pose();
+    case MeasurementKind::Position: break;
+  }
+  return MeasurementModel::targets({Vec3<double>::Zero()});
+}
+
 void measurement_map(MeasurementKind kind, const HybridGeometry<double>& g, double radius,
                      const Pose<double>& nominal_tool, Eigen::MatrixXd& M) {
-  const int rows = measurement_rows(kind);
-  if (M.rows() != rows || M.cols() != 6) M.resize(rows, 6);
-  switch (kind) {
-    case MeasurementKind::GaugeTargets: M = gauge_map(g, radius, nominal_tool); break;
-    case MeasurementKind::FullPose: M.setIdentity(); break;
-    case MeasurementKind::Position:
-      M.setZero();
-      M.leftCols<3>().setIdentity();
-      break;
-  }
+  M = measurement_model(kind, g, radius).map(nominal_tool);
 }
 
 Eigen::VectorXd measurement_deviation(MeasurementKind kind, const HybridGeometry<double>& g, double radius,

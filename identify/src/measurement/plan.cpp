@@ -25,6 +25,7 @@
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 
 namespace kincal::identify {
@@ -172,32 +173,26 @@ class DesignRows {
     const Family& family = family_of(robot);
     // The family's own instrument: the full pose, or its targets (the hybrid's gauge).
     if (m == PlanMeasure::Default) m = family.own_target_count() > 0 ? PlanMeasure::Targets : PlanMeasure::Pose;
-    pose_measure_ = m == PlanMeasure::Pose;
     sigma_mm_ = o.noise_mm;
     sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
-    if (pose_measure_) {
-      rows_ = 6;
-      measure_ = "the full pose (x, y, z, rx, ry, rz)";
+    if (m == PlanMeasure::Pose) {
       if (family.own_target_count() > 0)
         notes.push_back(std::string("kincal identify reads ") + family.own_measurement() +
                         " targets (t1..t3), not full poses; this plan's numbers are for a full-pose instrument");
     } else if (!robot.targets.empty()) {
-      rows_ = 3 * Index(robot.targets.size());
-      measure_ = std::to_string(robot.targets.size()) + " target position" + (robot.targets.size() > 1 ? "s" : "") +
-                 " (the robot's `targets`)";
+      model_ = MeasurementModel::targets(robot.targets);
       notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "
                       "it); with identify --instrument-frame the tracker's registration is identified as well, and "
                       "the frames are then the weakest part (docs/identify.md \"Laser-tracker targets\")");
-    } else if (family.own_target_count() > 0) {
-      rows_ = 3 * family.own_target_count();
-      own_targets_ = true;
-      measure_ = family.own_targets_description(robot);
+    } else if (const std::optional<MeasurementModel> own = family.own_targets(robot)) {
+      model_ = *own;
     } else {
       throw InputError(robot.name, 0, 0,
                        std::string("--measure targets needs the target positions on the ") + robot.target_body() +
                            ": add the key `targets` (1 to 3 points [x, y, z], mm, " + robot.target_body() +
                            " frame) to the robot description");
     }
+    measure_ = model_.describe();
     errors_ = detail::family_errors(robot);
     names_ = errors_->names();
     units_ = errors_->units();
@@ -238,14 +233,14 @@ class DesignRows {
     }
   }
 
-  Index rows_per_pose() const { return rows_; }
+  Index rows_per_pose() const { return model_.rows(); }
   Index base_parameters() const { return Index(kept_.size()); }
   Index parameters() const { return Index(names_.size()); }
   const std::vector<std::string>& names() const { return names_; }
   const std::vector<std::string>& units() const { return units_; }
   const std::string& measure() const { return measure_; }
   // Rows of the measured coordinates that are point displacements (mm).
-  bool position_row(Index i) const { return !pose_measure_ || i < 3; }
+  bool position_row(Index i) const { return !model_.measures_orientation() || i < 3; }
 
   // A (rows × parameters, whitened) and P (3 × parameters, mm per unit) of a
   // pose; false when its model cannot be evaluated.
@@ -266,50 +261,28 @@ class DesignRows {
       col += k;
     }
     if (!T.allFinite()) return false;
-    MatrixXd M;
-    measurement_map(pose, M);
-    A = whitening().asDiagonal() * M * T;
+    A = whitening().asDiagonal() * model_.map(pose) * T;  // whitened H = M·T
     P = T.topRows(3);
     return true;
   }
 
   VectorXd whitening() const {
-    VectorXd w = VectorXd::Constant(rows_, 1.0 / sigma_mm_);
-    if (pose_measure_) w.tail(3).setConstant(1.0 / sigma_rad_);
+    VectorXd w = VectorXd::Constant(model_.rows(), 1.0 / sigma_mm_);
+    if (model_.measures_orientation()) w.tail(3).setConstant(1.0 / sigma_rad_);
     return w;
   }
   // Multiplies whitened rows back to mm (angles × the lever) for the prior's scale.
   VectorXd displacement_scale() const {
-    VectorXd s = VectorXd::Constant(rows_, sigma_mm_);
-    if (pose_measure_) s.tail(3).setConstant(sigma_rad_ * kOrientationLeverMm);
+    VectorXd s = VectorXd::Constant(model_.rows(), sigma_mm_);
+    if (model_.measures_orientation()) s.tail(3).setConstant(sigma_rad_ * kOrientationLeverMm);
     return s;
   }
 
  private:
-  // Δy = M·twist: I6, the family's own targets' map (the gauge: seed 000
-  // Eq. (9)), or [I  −[R·t]×] per target.
-  void measurement_map(const Pose<double>& pose, MatrixXd& M) const {
-    if (pose_measure_) {
-      M = MatrixXd::Identity(6, 6);
-    } else if (own_targets_) {
-      family_of(robot_).own_target_map(robot_, pose, M);
-    } else {
-      M.resize(rows_, 6);
-      for (std::size_t k = 0; k < robot_.targets.size(); ++k) {
-        const Vec3<double> r = pose.R * robot_.targets[k];
-        Mat3<double> cross;
-        cross << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-        M.block(Index(3 * k), 0, 3, 3).setIdentity();
-        M.block(Index(3 * k), 3, 3, 3) = -cross;
-      }
-    }
-  }
-
   const Robot& robot_;
   EffectParameters<double> frame_;
-  bool pose_measure_ = false, own_targets_ = false;
+  MeasurementModel model_ = MeasurementModel::full_pose();  // what the instrument measures
   double sigma_mm_ = 0.005, sigma_rad_ = 0.005 / kOrientationLeverMm;
-  Index rows_ = 6;
   std::string measure_;
   std::shared_ptr<const detail::FamilyErrors> errors_;
   std::vector<Index> kept_;  // the base columns among the family's parameters

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "families/family.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -59,7 +60,12 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   std::normal_distribution<double> unit(0.0, 1.0);
   auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
 
-  const bool tracker = !options.targets.empty();
+  // What the instrument measures: the tracker's targets, else the pose (and
+  // the family's own targets, the hybrid's gauge, on the actual machine).
+  std::optional<MeasurementModel> tracker;
+  if (!options.targets.empty())
+    tracker = MeasurementModel::targets(options.targets, options.instrument_frame.value_or(Pose<double>{}));
+  const std::optional<MeasurementModel> own_targets = family.own_targets(actual);
   if (options.targets.size() > 3) throw InputError("--targets: at most three targets (t1..t3)");
   if (options.instrument_frame && !tracker)
     throw InputError("--instrument-frame applies to target measurements (--targets)");
@@ -96,12 +102,9 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     }
     if (tracker) {
       // Each target where the tracker sees it: T_IB · X · t_k, plus noise.
-      const Pose<double> seen = options.instrument_frame.value_or(Pose<double>{}) * r.pose;
+      const Eigen::VectorXd y = tracker->predict(r.pose);
       Eigen::Matrix<double, 3, 3> t = Eigen::Matrix<double, 3, 3>::Zero();
-      for (std::size_t k = 0; k < options.targets.size(); ++k) {
-        t.col(Eigen::Index(k)) = seen.transform(options.targets[k]);
-        for (int a = 0; a < 3; ++a) t(a, Eigen::Index(k)) += noise(options.noise_mm);
-      }
+      for (Eigen::Index k = 0; k < y.size(); ++k) t.data()[k] = y(k) + noise(options.noise_mm);
       row.targets = t;
       ++report.simulated;
       continue;
@@ -110,8 +113,10 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     for (int k = 0; k < 3; ++k) m(k) += noise(options.noise_mm);
     for (int k = 3; k < 6; ++k) m(k) += noise(options.noise_rad);
     row.measured = m;
-    if (Eigen::Matrix<double, 3, 3> t; family.own_targets(actual, r.pose, t)) {  // the hybrid's gauge
-      for (int k = 0; k < 9; ++k) t.data()[k] += noise(options.noise_mm);
+    if (own_targets) {  // the hybrid's gauge
+      const Eigen::VectorXd y = own_targets->predict(r.pose);
+      Eigen::Matrix<double, 3, 3> t;
+      for (int k = 0; k < 9; ++k) t.data()[k] = y(k) + noise(options.noise_mm);
       row.targets = t;
     }
     ++report.simulated;

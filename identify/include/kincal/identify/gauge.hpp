@@ -12,6 +12,7 @@
 #include "kincal/core/pose.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/measurement_model.hpp"
 
 namespace kincal::identify {
 
@@ -31,8 +32,12 @@ constexpr int measurement_rows(MeasurementKind k) {
 // plane through P0 normal to the tool axis, at 90°, 210°, 330° from tool x.
 Eigen::Matrix<double, 9, 6> gauge_map(const HybridGeometry<double>& g, double radius, const Pose<double>& nominal_tool);
 
+// The kinds as instances of the one measurement model (measurement_model.hpp):
+// the gauge, the full pose, one target at the tool point P.
+MeasurementModel measurement_model(MeasurementKind kind, const HybridGeometry<double>& g, double radius);
+
 // The measurement map M (measurement_rows(kind) × 6): Δy = M·$_t to first order.
-// Gauge: gauge_map; full pose: I6; position: [I3 0]. M is resized only if needed.
+// Gauge: gauge_map; full pose: I6; position: [I3 0] (measurement_model's map).
 void measurement_map(MeasurementKind kind, const HybridGeometry<double>& g, double radius,
                      const Pose<double>& nominal_tool, Eigen::MatrixXd& M);
 

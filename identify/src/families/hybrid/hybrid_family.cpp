@@ -299,19 +299,4 @@ std::unique_ptr<ActualMachine> HybridFamily::actual_machine(const Robot& nominal
   return std::make_unique<HybridActual>(nominal, actual);
 }
 
-std::string HybridFamily::own_targets_description(const Robot& robot) const {
-  char radius[32];
-  std::snprintf(radius, sizeof radius, "%.1f", robot.gauge_radius);
-  return std::string("seed 000's three-target gauge (t1..t3, radius ") + radius + " mm)";
-}
-
-void HybridFamily::own_target_map(const Robot& robot, const Pose<double>& pose, Eigen::MatrixXd& M) const {
-  M = gauge_map(robot.hybrid(), robot.gauge_radius, pose);
-}
-
-bool HybridFamily::own_targets(const Robot& actual, const Pose<double>& pose, Eigen::Matrix<double, 3, 3>& t) const {
-  t = gauge_targets(actual.hybrid(), actual.gauge_radius, pose);  // seed 000's gauge
-  return true;
-}
-
 }  // namespace kincal::identify

@@ -46,12 +46,12 @@ class HybridFamily final : public Family {
   int own_target_count() const override { return 3; }
   std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;
   const char* own_measurement() const override { return "the hybrid's gauge"; }
-  std::string own_targets_description(const Robot& robot) const override;
-  void own_target_map(const Robot& robot, const Pose<double>& pose, Eigen::MatrixXd& M) const override;
+  std::optional<MeasurementModel> own_targets(const Robot& robot) const override {
+    return MeasurementModel::gauge(robot.hybrid(), robot.gauge_radius);  // seed 000's gauge
+  }
   // seed 000's layers: one layer of pure translations.
   HandGrid hand_grid() const override { return {1, false}; }
   std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const override;
-  bool own_targets(const Robot& actual, const Pose<double>& pose, Eigen::Matrix<double, 3, 3>& targets) const override;
   std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const override;  // hybrid_errors.cpp
 };
 
