@@ -28,7 +28,7 @@ if [ "${1:-}" = "--compare" ]; then
     if [ ! -e "$3/$name" ]; then echo "only in $2: $name"; status=1; continue; fi
     if ! diff <(strip "$f" "$2") <(strip "$3/$name" "$3") > /dev/null; then
       echo "differs: $name"
-      diff <(strip "$f" "$2") <(strip "$3/$name" "$3") | head -6
+      diff <(strip "$f" "$2") <(strip "$3/$name" "$3") | head -6 || true  # on to the next file (pipefail)
       status=1
     fi
   done

@@ -309,7 +309,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
   const ki::TargetCalibrationOptions options;
   std::cout << "identify: " << a.data << ", robot " << robot.name << " ("
-            << (robot.is_stewart() ? "42-parameter model of seed 001" : "150 source errors of seed 000") << " from "
+            << robot.error_model() << " from "
             << data.target_columns() << " target(s) measured in the "
             << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
   const ki::TargetCalibration c = ki::calibrate_targets(robot, data, options);
@@ -348,7 +348,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
               << reg(2) << " mm, rx " << reg(3) << ", ry " << reg(4) << ", rz " << reg(5) << " rad\n";
   }
   for (std::size_t k = 0; k < used.targets.size(); ++k)
-    std::cout << "  target t" << k + 1 << " on the " << (robot.is_stewart() ? "platform" : "tool") << ": "
+    std::cout << "  target t" << k + 1 << " on the " << robot.target_body() << ": "
               << used.targets[k].transpose() << " mm (sd "
               << 1e3 * used.target_standard_error[k].transpose() << " um)\n";
   kincal_app::warn_correction_need(model, data);
