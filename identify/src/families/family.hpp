@@ -160,8 +160,8 @@ class Family {
   virtual std::optional<MeasurementModel> own_targets(const Robot&) const { return std::nullopt; }
   // The grid a user would measure by hand (kincal plan --compare).
   virtual HandGrid hand_grid() const = 0;
-  // The target fit's part of the family (target_family.hpp), for a robot
-  // with its limits opened.
+  // The family's error parameters as the target fit and the planner see
+  // them (family_errors.hpp), for a robot with its limits opened.
   virtual std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const = 0;
 };
 

@@ -1,4 +1,5 @@
-// The hybrid's part of the target fit (target_family.hpp).
+// The hybrid's error parameters as the target fit and the planner see them
+// (family_errors.hpp).
 #include "families/hybrid/hybrid_family.hpp"
 #include "families/family_errors.hpp"
 #include <algorithm>

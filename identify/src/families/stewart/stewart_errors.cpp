@@ -1,4 +1,5 @@
-// The 6-UPS's part of the target fit (target_family.hpp).
+// The 6-UPS's error parameters as the target fit and the planner see them
+// (family_errors.hpp).
 #include "families/stewart/stewart_family.hpp"
 #include "families/family_errors.hpp"
 #include "kincal/core/stewart.hpp"
