@@ -532,7 +532,7 @@ TEST(IdentifyWithEffects, HoldsParametersTheDataCannotTellFromTheBase) {
   // offsets wander, no table.
   ki::EffectCalibrationOptions all_free;
   all_free.alpha = 0;
-  all_free.estimator = "ols";
+  all_free.estimator = ki::EstimatorKind::Ols;
   ki::EffectCalibrationReport free_report;
   const ki::CalibrationModel wandering = ki::calibrate_with_effects(m.nominal, data, {"scale"}, all_free, &free_report);
   EXPECT_TRUE(free_report.held.empty());
@@ -543,7 +543,7 @@ TEST(IdentifyWithEffects, HoldsParametersTheDataCannotTellFromTheBase) {
   // The default base (ridge, k by GCV on base + effects) holds the
   // ill-conditioned combinations near the coarse machine even with every
   // effect parameter free (issue #14): measured 0.1 standard errors.
-  all_free.estimator.clear();
+  all_free.estimator.reset();
   const ki::CalibrationModel shrunk = ki::calibrate_with_effects(m.nominal, data, {"scale"}, all_free);
   EXPECT_LT(worst_offset_error_in_standard_errors(m, shrunk), 4.0);
   EXPECT_NO_THROW(ki::calibration_table(shrunk));
@@ -580,7 +580,7 @@ TEST(IdentifyWithEffects, ComplianceAndScaleTogetherFitLikeComplianceAlone) {
 TEST(IdentifyWithEffects, HybridDefaultBaseCompensatesAtLeastAsWellAsOls) {
   const Machine& m = machine("hybrid");
   ki::EffectCalibrationOptions ols;
-  ols.estimator = "ols";
+  ols.estimator = ki::EstimatorKind::Ols;
   auto compensated_um = [&](const std::string& effect, const ki::EffectCalibrationOptions& options) {
     const ki::EffectValues truth = values_of(m.nominal, injected().at("hybrid").at(effect));
     const ki::PoseTable data = simulate_with(m, truth);

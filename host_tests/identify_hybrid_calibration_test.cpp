@@ -102,9 +102,9 @@ Evaluation evaluate(std::uint64_t machine_seed, double noise_mm) {
   ev.cal = calibrate_hybrid(nominal(), data);
   const HybridGeometry<double>& g = nominal().hybrid();
   ev.none = evaluate_hybrid(m, g, poses(), nullptr);
-  const HybridCompensation c0 = ev.cal.compensation(HybridFineEstimator::None);
-  const HybridCompensation co = ev.cal.compensation(HybridFineEstimator::Ols);
-  const HybridCompensation cl = ev.cal.compensation(HybridFineEstimator::Liu);
+  const HybridCompensation c0 = ev.cal.compensation(std::nullopt);  // the coarse stage alone
+  const HybridCompensation co = ev.cal.compensation(EstimatorKind::Ols);
+  const HybridCompensation cl = ev.cal.compensation(EstimatorKind::Liu);
   ev.coarse = evaluate_hybrid(m, g, poses(), &c0);
   ev.ols = evaluate_hybrid(m, g, poses(), &co);
   ev.liu = evaluate_hybrid(m, g, poses(), &cl);
@@ -182,12 +182,12 @@ TEST(identifyHybridCalibration, MonteCarloRobustnessIndexEta) {
 
 TEST(identifyHybridCalibration, ModelRoundTripCompensatesIdentically) {
   const HybridCalibration cal = calibrate_hybrid(nominal(), measure(machine(7), 0.005, 107));
-  const CalibrationModel model = hybrid_model(nominal(), cal, HybridFineEstimator::Liu, "data.csv");
+  const CalibrationModel model = hybrid_model(nominal(), cal, EstimatorKind::Liu, "data.csv");
   EXPECT_EQ(model.estimator, "liu");
   EXPECT_EQ(model.parameters.size(), 6 + (cal.kept.size() - 6) + cal.dropped.size());
   const CalibrationModel back = parse_model(model_to_json(model), "MODEL.json");
   const HybridCompensation from_model = hybrid_compensation_from_model(back);
-  const HybridCompensation direct = cal.compensation(HybridFineEstimator::Liu);
+  const HybridCompensation direct = cal.compensation(EstimatorKind::Liu);
   for (const PoseRow& row : poses().rows) {
     const Pose<double> p = Pose<double>::from_xyz_rpy(row.commanded);
     Vec6<double> q1, q2;
@@ -201,7 +201,7 @@ TEST(identifyHybridCalibration, CompensationInvertsTheModelledMachine) {
   // A machine made exactly of the compensation's beliefs: commanding the
   // compensated joints lands on the requested pose to first order.
   const HybridCalibration cal = calibrate_hybrid(nominal(), measure(machine(7), 0.0, 107));
-  const HybridCompensation c = cal.compensation(HybridFineEstimator::Liu);
+  const HybridCompensation c = cal.compensation(EstimatorKind::Liu);
   Robot believed = nominal();
   believed.source_errors = c.structural;
   believed.source_errors.head<6>() = c.encoder_offsets;
@@ -239,8 +239,8 @@ TEST(identifyHybridCalibration, SweepSelectionToleranceAndScaling) {
       o.selection_tolerance = tol;
       o.scale_columns = scaled;
       const HybridCalibration cal = calibrate_hybrid(nominal(), data, o);
-      const HybridCompensation co = cal.compensation(HybridFineEstimator::Ols);
-      const HybridCompensation cl = cal.compensation(HybridFineEstimator::Liu);
+      const HybridCompensation co = cal.compensation(EstimatorKind::Ols);
+      const HybridCompensation cl = cal.compensation(EstimatorKind::Liu);
       const auto eo = evaluate_hybrid(m, nominal().hybrid(), poses(), &co);
       const auto el = evaluate_hybrid(m, nominal().hybrid(), poses(), &cl);
       const HybridMonteCarlo mc = hybrid_monte_carlo(cal, 300, 0.005, 5);
@@ -254,7 +254,7 @@ TEST(identifyHybridCalibration, SweepSelectionToleranceAndScaling) {
 
 namespace {
 
-HybridCalibrationOptions fine_with(HybridFineEstimator e) {
+HybridCalibrationOptions fine_with(EstimatorKind e) {
   HybridCalibrationOptions o;
   o.estimator = e;
   return o;
@@ -268,13 +268,12 @@ TEST(identifyHybridCalibration, EachFineEstimatorCompensatesTheMachine) {
   // ridge and PCR is 5 µm maximum position error in the test layer — both
   // shrink the noise in the ill-conditioned directions more than Liu, whose
   // shrinkage is bounded by d (docs/hybrid-calibration.md).
-  const HybridFineEstimator all[] = {HybridFineEstimator::Ols, HybridFineEstimator::Liu, HybridFineEstimator::Ridge,
-                                     HybridFineEstimator::Pcr};
+  const EstimatorKind all[] = {EstimatorKind::Ols, EstimatorKind::Liu, EstimatorKind::Ridge, EstimatorKind::Pcr};
   {
     const Robot m = machine(11);
     const PoseTable data = measure(m, 0.0, 111);
     const HybridCalibration cal = calibrate_hybrid(nominal(), data);
-    for (HybridFineEstimator e : all) {
+    for (EstimatorKind e : all) {
       const HybridCompensation c = cal.compensation(e);
       for (const auto& l : evaluate_hybrid(m, nominal().hybrid(), poses(), &c))
         EXPECT_LT(l.max_position, 0.0005) << to_string(e) << " layer " << l.layer;
@@ -287,7 +286,7 @@ TEST(identifyHybridCalibration, EachFineEstimatorCompensatesTheMachine) {
   const Robot m = machine(7);
   const PoseTable data = measure(m, 0.005, 107);
   std::map<std::string, HybridLayerError> test_layer;
-  for (HybridFineEstimator e : all) {
+  for (EstimatorKind e : all) {
     const HybridCalibration cal = calibrate_hybrid(nominal(), data, fine_with(e));
     EXPECT_EQ(cal.options.estimator, e);
     const HybridCompensation c = cal.compensation();  // the options' estimator
@@ -313,17 +312,17 @@ TEST(identifyHybridCalibration, EachFineEstimatorCompensatesTheMachine) {
 
 TEST(identifyHybridCalibration, ModelRecordsTheSelectedEstimator) {
   const PoseTable data = measure(machine(7), 0.005, 107);
-  const HybridCalibration cal = calibrate_hybrid(nominal(), data, fine_with(HybridFineEstimator::Ridge));
-  const CalibrationModel model = hybrid_model(nominal(), cal, std::nullopt, "data.csv");
+  const HybridCalibration cal = calibrate_hybrid(nominal(), data, fine_with(EstimatorKind::Ridge));
+  const CalibrationModel model = hybrid_model(nominal(), cal, "data.csv");
   EXPECT_EQ(model.estimator, "ridge");
   EXPECT_GT(model.settings.at("ridge_k"), 0.0);
   EXPECT_EQ(model.settings.at("ridge_k_gcv"), 1.0);
   EXPECT_EQ(model.settings.at("coarse_nodes"), 98.0);
   EXPECT_EQ(model.settings.count("liu_d"), 0u);
-  const CalibrationModel pcr = hybrid_model(nominal(), cal, HybridFineEstimator::Pcr);
+  const CalibrationModel pcr = hybrid_model(nominal(), cal, EstimatorKind::Pcr);
   EXPECT_EQ(pcr.estimator, "pcr");
   EXPECT_EQ(pcr.settings.at("pcr_components"), static_cast<double>(cal.pcr.pcr_components));
-  EXPECT_EQ(hybrid_model(nominal(), cal, HybridFineEstimator::Liu).settings.at("liu_d"), cal.liu.liu_d);
+  EXPECT_EQ(hybrid_model(nominal(), cal, EstimatorKind::Liu).settings.at("liu_d"), cal.liu.liu_d);
   // The model compensates as the calibration's ridge estimate does.
   const HybridCompensation from_model = hybrid_compensation_from_model(parse_model(model_to_json(model), "m.json"));
   const HybridCompensation direct = cal.compensation();
@@ -353,7 +352,7 @@ TEST(identifyHybridCalibration, CoarseStageOnItsOwnLayer) {
   std::printf("coarse on layer 2 (49 nodes) vs on the 98 cal nodes: |xi difference| = %.2g, %zu rounds\n", dxi,
               own.coarse_history.size());
   EXPECT_LT(dxi, 0.005);
-  const HybridCompensation c0 = own.compensation(HybridFineEstimator::None), c1 = own.compensation();
+  const HybridCompensation c0 = own.compensation(std::nullopt), c1 = own.compensation();  // coarse alone, + Liu
   const auto coarse = evaluate_hybrid(m, nominal().hybrid(), poses(), &c0);
   const auto fine = evaluate_hybrid(m, nominal().hybrid(), poses(), &c1);
   print_table("coarse on layer 2, fine (Liu) on layers 1 and 3:", {{"coarse", coarse}, {"coarse+Liu", fine}});

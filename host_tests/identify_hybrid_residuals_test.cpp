@@ -48,7 +48,7 @@ TEST(identifyHybridResiduals, CalibrationBringsTestLayerResidualsToTheNoise) {
                                  "name,value\ndxi_3_1,0.3\ndxi_3_2,-0.25\ndxi_5_4,-0.0004\ndx_0_1,0.04\ndy_6_4,-0.04\n",
                                  0.0);
   const HybridCalibration c = calibrate_hybrid(nominal, data);
-  const HybridCompensation comp = c.compensation(HybridFineEstimator::Liu);
+  const HybridCompensation comp = c.compensation(EstimatorKind::Liu);
   const PoseErrorReport before = hybrid_residuals(nominal, nullptr, data);
   const PoseErrorReport after = hybrid_residuals(nominal, &comp, data);
   EXPECT_GT(before.groups.at("test").rms_position_mm, 0.3);

@@ -333,13 +333,12 @@ TEST(identifyLargeErrors, HybridConvergesFromMillimetreSourceErrors) {
   // Seed 000's one step with Liu kept whatever the data say (the code before).
   ki::HybridCalibrationOptions one_step;
   one_step.max_linearisations = 1;
-  one_step.liu_fallback = ki::HybridFineEstimator::None;
+  one_step.liu_fallback = std::nullopt;
   const ki::HybridCalibration before = ki::calibrate_hybrid(robot, large.cal, one_step);
   const double rms_before = std::sqrt(before.liu.residual.squaredNorm() / double(before.liu.residual.size()));
 
   const ki::HybridCalibration c = ki::calibrate_hybrid(robot, large.cal);
-  EXPECT_EQ(c.options.estimator, ki::HybridFineEstimator::Ridge) << "Liu's shrinkage is rejected (F " << c.liu_check_f
-                                                                  << ")";
+  EXPECT_EQ(c.options.estimator, ki::EstimatorKind::Ridge) << "Liu's shrinkage is rejected (F " << c.liu_check_f << ")";
   EXPECT_LT(c.liu_check_p, 1e-6);
   EXPECT_GE(c.linearisations.size(), 2u);
   EXPECT_TRUE(c.fine_linearisation_valid);
@@ -353,7 +352,7 @@ TEST(identifyLargeErrors, HybridConvergesFromMillimetreSourceErrors) {
   // Small errors on the same design and noise draws: Liu's shrinkage is kept
   // (the data do not reject it); that is the floor.
   const ki::HybridCalibration floor_cal = ki::calibrate_hybrid(robot, small.cal);
-  EXPECT_EQ(floor_cal.options.estimator, ki::HybridFineEstimator::Liu);
+  EXPECT_EQ(floor_cal.options.estimator, ki::EstimatorKind::Liu);
   const double floor = held_out_compensated_rms(robot, floor_cal, small);
   const double after = held_out_compensated_rms(robot, c, large);
   const double one = held_out_compensated_rms(robot, before, large);

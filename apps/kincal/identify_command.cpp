@@ -180,11 +180,8 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   ki::HybridCalibrationOptions ho;
   // Liu by default, unless the data reject its shrinkage (then ridge, said
   // below); an estimator asked for by name is kept.
-  if (!a.estimator.empty()) ho.liu_fallback = ki::HybridFineEstimator::None;
-  ho.estimator = eo.kind == ki::EstimatorKind::Ols     ? ki::HybridFineEstimator::Ols
-                 : eo.kind == ki::EstimatorKind::Ridge ? ki::HybridFineEstimator::Ridge
-                 : eo.kind == ki::EstimatorKind::Pcr   ? ki::HybridFineEstimator::Pcr
-                                                       : ki::HybridFineEstimator::Liu;
+  if (!a.estimator.empty()) ho.liu_fallback = std::nullopt;
+  ho.estimator = eo.kind;
   ho.ridge = eo.ridge;
   ho.pcr = eo.pcr;
   ho.coarse_layers = a.coarse_layers;
@@ -247,7 +244,7 @@ int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki:
   const ki::Estimate& est = *used.estimate(used.options.estimator);
   std::cout << "  estimator " << describe_estimate(est, eo) << "; fit residual rms "
             << 1e3 * std::sqrt(est.rss / double(std::max<Eigen::Index>(1, est.rows))) << " um per gauge coordinate\n";
-  ki::CalibrationModel model = ki::hybrid_model(robot, used, std::nullopt, a.data);
+  ki::CalibrationModel model = ki::hybrid_model(robot, used, a.data);
   // The base by default (issue #14): seed 000's estimate finished by
   // Gauss–Newton on the nonlinear model, shrunk toward the coarse machine by
   // a ridge penalty whose k is chosen by GCV at the solution — the base of

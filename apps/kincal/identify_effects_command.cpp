@@ -9,6 +9,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/model.hpp"
 
@@ -23,7 +24,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   const ki::PoseTable data = read_measurements(robot, data_path, instrument_frame);
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
-  opt.estimator = estimator;
+  if (!estimator.empty()) opt.estimator = ki::parse_estimator(estimator);
   opt.ridge_k = ridge_k;
   opt.alpha = effect_alpha;
   // Blunders: the same screen as plain identify (identify/outliers.hpp), on

@@ -254,7 +254,7 @@ void BM_IdentifyHybridWithScale(benchmark::State& state) {
   const ki::PoseTable data =
       simulated(nominal, actual, ki::read_pose_table(dir + "/diagnosis_poses.csv"), 0.005, 0.0, scale);
   ki::EffectCalibrationOptions o;
-  o.estimator = state.range(0) == 1 ? "ridge" : "ols";
+  o.estimator = state.range(0) == 1 ? ki::EstimatorKind::Ridge : ki::EstimatorKind::Ols;
   ki::EffectCalibrationReport report;
   for (auto _ : state) {
     const ki::CalibrationModel m = ki::calibrate_with_effects(nominal, data, {"scale"}, o, &report);

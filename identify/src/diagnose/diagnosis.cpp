@@ -400,7 +400,7 @@ void DiagnosisRun::check_inputs() {
 void DiagnosisRun::fit_base_model() {
   progress("fitting the base model on the cal rows");
   en = effect_nodes(robot, data);
-  base = detail::fit_base(robot, data, en, "ols", true);
+  base = detail::fit_base(robot, data, en, EstimatorKind::Ols, true);
   d.base_model = base.description;
 }
 
@@ -641,7 +641,7 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   // better than the linear step (an alternation that failed is ignored).
   progress("re-linearising the base with " + accepted_effect);
   EffectCalibrationOptions eo;
-  eo.estimator = "ols";
+  eo.estimator = EstimatorKind::Ols;
   eo.max_passes = 4;
   // Every parameter of an accepted effect stays free here: the step
   // moves the base for the next tests, and the elimination's extra
@@ -649,7 +649,7 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   eo.alpha = 0;
   const CalibrationModel m = calibrate_with_effects(robot, data, accepted, eo);
   BaseModel moved = detail::fit_base(robot, detail::effect_corrected_table(robot, data, en, m.effects.to_core(robot)),
-                                     en, "ols", true);
+                                     en, EstimatorKind::Ols, true);
   scale_orientation_rows(moved, orientation_factor);  // rows of orientation only
   bool same_nodes = moved.nodes.size() == base.nodes.size();
   for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)

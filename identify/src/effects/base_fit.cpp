@@ -59,7 +59,7 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
 }  // namespace
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
-                   const std::string& estimator, bool finish_least_squares, double ridge_k) {
+                   std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k) {
   if (uses_target_model(robot, fit_data)) return target_base(robot, fit_data, nodes);
   return family_of(robot).fit_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
 }

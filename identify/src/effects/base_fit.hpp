@@ -13,6 +13,7 @@
 
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
 
@@ -45,7 +46,7 @@ struct BaseModel {
   Eigen::Index parameters = 0;
   std::vector<NodeData> nodes;
   CalibrationModel model;  // the fitted base model (no effects)
-  // "ridge" fits (hybrid): the penalty k·‖χ − χ_coarse‖² minimised with the
+  // Ridge fits (hybrid): the penalty k·‖χ − χ_coarse‖² minimised with the
   // RSS, and χ − χ_coarse over the design's columns (k = 0 otherwise).
   double ridge_k = 0;
   Eigen::VectorXd column_away;
@@ -63,15 +64,16 @@ inline Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
 // data (either family).
 // `fit_data`: the table the base model is fitted on and compared with (the
 // measurements, possibly corrected for effects); `nodes`: effect_nodes of the
-// original table (same rows). `estimator`: "" for the family default.
+// original table (same rows). `estimator`: nullopt for the family default.
 // `finish_least_squares`: the hybrid's seed 000 estimate (one fine step from
 // the coarse machine) is finished by Gauss–Newton steps to the OLS minimum —
 // what a residual diagnosis needs; identification keeps seed 000's estimate
 // (its Liu shrinkage is what keeps the ill-conditioned fit stable).
-// `ridge_k`: with estimator "ridge" (hybrid), the penalty's k; 0 picks it by
+// `ridge_k`: with estimator Ridge (hybrid), the penalty's k; 0 picks it by
 // seed 000's fine-stage GCV.
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
-                   const std::string& estimator = {}, bool finish_least_squares = false, double ridge_k = 0);
+                   std::optional<EstimatorKind> estimator = std::nullopt, bool finish_least_squares = false,
+                   double ridge_k = 0);
 
 // The table as the effect-free model should see it: q1..q6 := the joints the
 // machine really had (commands + Δq of the joint-space effects), measured

@@ -135,7 +135,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
     const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
     // The base is fitted to its least-squares minimum (what the linear [H G]
     // step assumes), here and for the final model.
-    base = detail::fit_base(robot, corrected, nodes, "ols", true);
+    base = detail::fit_base(robot, corrected, nodes, EstimatorKind::Ols, true);
     MatrixXd H;
     VectorXd y;
     stack(base, false, H, y);
@@ -177,7 +177,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   // the loop may belong to an update that was undone or not yet applied).
   if (!list.empty())
     base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
-                            "ols", true);
+                            EstimatorKind::Ols, true);
   return base;
 }
 
@@ -288,9 +288,10 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     if (!missing.empty()) throw InputError(data.file, 0, 0, "effect '" + name + "' cannot be identified: " + missing);
     list.push_back(e);
   }
-  if (!options.estimator.empty() && options.estimator != "ols" &&
-      !(options.estimator == "ridge" && robot.is_hybrid()))
-    throw InputError("--estimator " + options.estimator + " with --effects: the base is fitted by " +
+  if (options.estimator && *options.estimator != EstimatorKind::Ols &&
+      !(*options.estimator == EstimatorKind::Ridge && robot.is_hybrid()))
+    throw InputError("--estimator " + std::string(to_string(*options.estimator)) +
+                     " with --effects: the base is fitted by " +
                      (robot.is_hybrid() ? "ols (default) or ridge" : "ols (seed 001's iterated least squares)"));
   if (!(options.ridge_k >= 0)) throw InputError("--ridge-k must be a number >= 0 (0: by GCV)");
   const std::vector<std::optional<EffectNode>> nodes = effect_nodes(robot, data);
@@ -318,7 +319,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   // base 8 mm out). The 6-UPS: the alternation, whose base fit (seed 001's
   // iterated LS) converges in a few rounds and is not shrunk.
   std::optional<detail::HybridBaseFit> hybrid;
-  const bool choose_k = options.estimator != "ols" && !(options.ridge_k > 0);
+  const bool choose_k = options.estimator != EstimatorKind::Ols && !(options.ridge_k > 0);
   auto fit = [&]() {
     if (!robot.is_hybrid() || uses_target_model(robot, data)) {  // target data: the target fit, either family
       detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep);
@@ -327,7 +328,8 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     }
     std::vector<HybridCompensation> starts;
     if (!hybrid) {
-      hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? "ridge" : "ols", true, options.ridge_k);
+      hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, true,
+                     options.ridge_k);
       starts = {hybrid->seed_estimate()};
     } else {
       starts = {hybrid->seed_estimate(), hybrid->state()};

@@ -28,6 +28,7 @@
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
+#include "kincal/identify/estimators.hpp"
 #include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/robot.hpp"
@@ -132,8 +133,9 @@ class Family {
   // The family's own pipeline on its own measurement, as a linear problem at
   // its solution (effects/base_fit.hpp: fit_base documents the arguments).
   virtual detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
-                                     const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
-                                     bool finish_least_squares, double ridge_k) const = 0;
+                                     const std::vector<std::optional<EffectNode>>& nodes,
+                                     std::optional<EstimatorKind> estimator, bool finish_least_squares,
+                                     double ridge_k) const = 0;
 
   // ---- the controller's table (calibration_table.hpp): the machine part
   // and the default bounds of the model's table; calibration_table.cpp adds

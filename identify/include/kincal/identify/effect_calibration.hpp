@@ -8,6 +8,7 @@
 // the effect values settle. docs/effects.md.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,14 +20,15 @@
 namespace kincal::identify {
 
 struct EffectCalibrationOptions {
-  // The base model in every pass: "" or "ols", its least-squares minimum
-  // (the linear effect step assumes a minimum); "ridge" (hybrid only), the
-  // minimum of RSS + k·‖χ − χ_coarse‖² over seed 000's identifiable source
-  // errors, effects unpenalised. Ridge keeps the ill-conditioned directions
-  // near the coarse machine, where seed 000's first-order error twist still
-  // describes the machine (docs/diagnosis.md, measured per effect). Other
-  // values throw InputError.
-  std::string estimator;
+  // The base model in every pass: Ols, its least-squares minimum (the linear
+  // effect step assumes a minimum); Ridge (hybrid only), the minimum of
+  // RSS + k·‖χ − χ_coarse‖² over seed 000's identifiable source errors,
+  // effects unpenalised. Ridge keeps the ill-conditioned directions near the
+  // coarse machine, where seed 000's first-order error twist still describes
+  // the machine (docs/diagnosis.md, measured per effect). nullopt: the
+  // default, for the hybrid's gauge ridge with k by GCV at the solution
+  // (ridge_k), else OLS. Other estimators throw InputError.
+  std::optional<EstimatorKind> estimator;
   double ridge_k = 0;  // hybrid: the base penalty's k as given; 0 chooses it by GCV on base + effects at the solution
   int max_passes = 6;
   double tolerance = 1e-3;  // stop when the effect update is below this fraction of the values (scaled)

@@ -29,10 +29,6 @@
 
 namespace kincal::identify {
 
-// Which fine-stage estimate: None = the coarse encoder offsets only.
-enum class HybridFineEstimator { None, Ols, Liu, Ridge, Pcr };
-const char* to_string(HybridFineEstimator estimator);  // "coarse-ols", "ols", "liu", "ridge", "pcr"
-
 struct HybridCalibrationOptions {
   // Eq. (15) stop rule, read as "relative change between two successive
   // estimates": ‖ξ̂^{k+1} − ξ̂^k‖ / ‖ξ̂^{k+1}‖ ≤ eps_xi (5 % as the paper).
@@ -52,8 +48,7 @@ struct HybridCalibrationOptions {
   // The fine estimator the calibration's model and compensation use (MODEL.json
   // "estimator"). All four are computed from one SVD of the fine design, so any
   // of them can still be compared (compensation(estimator)).
-  // None (coarse only, as fine = false) is not a choice here.
-  HybridFineEstimator estimator = HybridFineEstimator::Liu;
+  EstimatorKind estimator = EstimatorKind::Liu;
   RidgeOptions ridge;                              // ridge's k: GCV by default
   PcrOptions pcr = PcrOptions{0, 0.0, 1e3, true};  // PCR's number of components: GCV by default
   // The coarse stage's nodes. Seed 000 Sec. 4.3: "the number of calibration
@@ -80,8 +75,8 @@ struct HybridCalibrationOptions {
   // what it adds to the OLS residual at level liu_alpha; hybrid_calibration.cpp),
   // the fine stage uses this estimator instead and says so
   // (HybridCalibration::liu_check_*; options.estimator then names it).
-  // None: keep Liu whatever the data say (an explicit --estimator liu).
-  HybridFineEstimator liu_fallback = HybridFineEstimator::Ridge;
+  // nullopt: keep Liu whatever the data say (an explicit --estimator liu).
+  std::optional<EstimatorKind> liu_fallback = EstimatorKind::Ridge;
   double liu_alpha = 0.01;
 };
 
@@ -157,13 +152,15 @@ struct HybridCalibration {
   double outlier_p_threshold = 0;
   OutlierReport outlier_report;  // the node test behind node_tests, on fine_problem (empty without test_nodes)
 
-  // The fine estimate of an estimator (null for None or without a fine stage),
-  // and its 150 Δχ̂ (zeros for None / no fine stage).
-  const Estimate* estimate(HybridFineEstimator estimator) const;
-  Eigen::VectorXd chi(HybridFineEstimator estimator) const;
-  // Total encoder offsets ξ̂ + Δξ̂ (fine) and the structural part, for an
-  // estimator (default: options.estimator).
-  HybridCompensation compensation(std::optional<HybridFineEstimator> estimator = std::nullopt) const;
+  // The fine estimate of an estimator (null without a fine stage), and its
+  // 150 Δχ̂ (zeros without a fine stage).
+  const Estimate* estimate(EstimatorKind estimator) const;
+  Eigen::VectorXd chi(EstimatorKind estimator) const;
+  // Total encoder offsets ξ̂ + Δξ̂ (fine) and the structural part, for a fine
+  // estimator; nullopt: the coarse stage alone (ξ̂, no structural part), the
+  // compensation before any fine stage.
+  HybridCompensation compensation(std::optional<EstimatorKind> fine) const;
+  HybridCompensation compensation() const { return compensation(options.estimator); }
 };
 
 // Coarse + fine calibration on the `cal` rows of `data` that carry gauge
@@ -251,12 +248,15 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
 
 // Parameters by HybridErrorModel names: dxi_* = total encoder offsets
 // (coarse + fine), then the kept structural errors (fine), then the dropped
-// ones (identifiable = false, value 0). estimator: to_string(estimator), by
-// default the calibration's options.estimator; settings: the estimator's
-// (estimator_settings: liu_d, ridge_k, pcr_components, ...) and eps_xi,
-// coarse_iterations, coarse_nodes, rank, condition_number, cal_nodes.
+// ones (identifiable = false, value 0), of a fine estimator's compensation
+// (compensation(fine); nullopt: the coarse stage alone). estimator:
+// to_string(*fine), "coarse-ols" for the coarse stage alone; settings: the
+// estimator's (estimator_settings: liu_d, ridge_k, pcr_components, ...) and
+// eps_xi, coarse_iterations, coarse_nodes, rank, condition_number, cal_nodes.
 CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& calibration,
-                              std::optional<HybridFineEstimator> estimator = std::nullopt,
+                              std::optional<EstimatorKind> fine, const std::string& data_file = {});
+// The model of the calibration's own estimator (options.estimator).
+CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& calibration,
                               const std::string& data_file = {});
 // Rebuilds the compensation from a model: dxi_* (and the older joint-offset
 // names dq1..dq3, dtheta4..dtheta6) → encoder offsets, any other

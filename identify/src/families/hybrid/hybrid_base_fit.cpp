@@ -21,12 +21,13 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
-                             const std::vector<std::optional<EffectNode>>& en, const std::string& estimator,
-                             bool finish, double ridge_k)
-    : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())), ridge_(estimator == "ridge"), finish_(finish) {
-  fine_ = ridge_                             ? HybridFineEstimator::Ridge
-          : estimator == "ols" || finish     ? HybridFineEstimator::Ols
-                                             : HybridFineEstimator::Liu;
+                             const std::vector<std::optional<EffectNode>>& en,
+                             std::optional<EstimatorKind> estimator, bool finish, double ridge_k)
+    : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())), ridge_(estimator == EstimatorKind::Ridge),
+      finish_(finish) {
+  fine_ = ridge_                                      ? EstimatorKind::Ridge
+          : estimator == EstimatorKind::Ols || finish ? EstimatorKind::Ols
+                                                      : EstimatorKind::Liu;
   HybridCalibrationOptions opt;
   // Seed 000's single fine step by the fit's estimator: the fit finishes it
   // by its own (damped) Gauss–Newton steps, from the coarse machine instead
@@ -35,7 +36,7 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   // instructions per construction (a diagnosis constructs several).
   opt.estimator = fine_;
   opt.max_linearisations = 1;
-  opt.liu_fallback = HybridFineEstimator::None;
+  opt.liu_fallback = std::nullopt;
   opt.test_nodes = false;  // the base fit's own screen runs on its final model (outliers.hpp), not here
   cal_ = calibrate_hybrid(robot, data, opt);
   // Start from seed 000's coarse + fine estimate and finish the fit by
@@ -43,7 +44,7 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   // one linear step from the coarse machine, which leaves the residual short
   // of its minimum (e.g. 6.3 vs 4.9 µm RMS on the diagnosis design) and not
   // orthogonal to the columns — the F tests and the effect fits need both.
-  // "ridge": the minimum of RSS + k·‖χ − χ_coarse‖² (k by seed 000's
+  // Ridge: the minimum of RSS + k·‖χ − χ_coarse‖² (k by seed 000's
   // fine-stage GCV unless given), the penalised objective reached by
   // Gauss–Newton on the augmented rows √k·I.
   comp_ = cal_.compensation(fine_);
@@ -195,7 +196,7 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
                      (ridge     ? "ridge (k = " + std::to_string(penalty_) + ") finished by " + std::to_string(steps) +
                                    " Gauss-Newton steps"
                       : finish_ ? "OLS finished by " + std::to_string(steps) + " Gauss-Newton steps"
-                                : std::string(fine_ == HybridFineEstimator::Liu ? "Liu" : "OLS"));
+                                : std::string(fine_ == EstimatorKind::Liu ? "Liu" : "OLS"));
   base.model = hybrid_model(*robot_, cal_, fine_, data_file);
   for (ModelParameter& mp : base.model.parameters) {
     const int idx = comp_.model->index_of(mp.name);
@@ -204,7 +205,7 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
   }
   base.model.settings["gauss_newton_steps"] = double(steps);
   if (ridge) {
-    base.model.estimator = "ridge";
+    base.model.estimator = to_string(EstimatorKind::Ridge);
     base.model.settings["ridge_k"] = penalty_;
   }
   base.ridge_k = penalty_;
@@ -214,14 +215,14 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
 }  // namespace detail
 
 detail::BaseModel HybridFamily::fit_base(const Robot& robot, const PoseTable& data,
-                                         const std::vector<std::optional<EffectNode>>& en, const std::string& estimator,
-                                         bool finish, double ridge_k) const {
+                                         const std::vector<std::optional<EffectNode>>& en,
+                                         std::optional<EstimatorKind> estimator, bool finish, double ridge_k) const {
   using namespace detail;
   HybridBaseFit fit(robot, data, en, estimator, finish, ridge_k);
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
   BaseModel base;
-  const bool iterate = finish || estimator == "ridge";
+  const bool iterate = finish || estimator == EstimatorKind::Ridge;
   if (iterate) fit.start_from_the_better(data);
   // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
   // lower the objective (damped_gauss_newton): 6 plain steps were enough

@@ -26,9 +26,9 @@ namespace kincal::identify::detail {
 class HybridBaseFit {
  public:
   HybridBaseFit(const Robot& robot, const PoseTable& start, const std::vector<std::optional<EffectNode>>& nodes,
-                const std::string& estimator, bool finish_least_squares, double ridge_k);
+                std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k);
   Eigen::Index parameters() const { return p_; }
-  double penalty() const { return penalty_; }  // k of "ridge", else 0
+  double penalty() const { return penalty_; }  // k of ridge, else 0
   void set_penalty(double k) { penalty_ = k; }
   Eigen::VectorXd values() const;              // χ on the identifiable columns
   Eigen::VectorXd away() const { return values() - reference_; }  // χ − χ_coarse
@@ -63,7 +63,7 @@ class HybridBaseFit {
   const std::vector<std::optional<EffectNode>>* en_;
   HybridGeometry<double> g0_;
   bool ridge_, finish_;
-  HybridFineEstimator fine_ = HybridFineEstimator::Ols;
+  EstimatorKind fine_ = EstimatorKind::Ols;
   HybridCalibration cal_;
   HybridCompensation comp_, seed_estimate_;
   Eigen::Index p_ = 0;

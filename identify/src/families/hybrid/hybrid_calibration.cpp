@@ -104,69 +104,50 @@ HybridGeometry<double> HybridCompensation::controller_geometry() const {
   return g;
 }
 
-const char* to_string(HybridFineEstimator estimator) {
-  switch (estimator) {
-    case HybridFineEstimator::None: return "coarse-ols";
-    case HybridFineEstimator::Ols: return "ols";
-    case HybridFineEstimator::Liu: return "liu";
-    case HybridFineEstimator::Ridge: return "ridge";
-    case HybridFineEstimator::Pcr: return "pcr";
-  }
-  return "?";
-}
-
 namespace {
 
 // The EstimatorOptions of a fine estimator under the calibration's options.
-EstimatorOptions fine_options(const HybridCalibrationOptions& o, HybridFineEstimator estimator) {
+EstimatorOptions fine_options(const HybridCalibrationOptions& o, EstimatorKind estimator) {
   EstimatorOptions e;
   e.ridge = o.ridge;
   e.pcr = o.pcr;
   e.liu = o.liu;
-  switch (estimator) {
-    case HybridFineEstimator::Ridge: e.kind = EstimatorKind::Ridge; break;
-    case HybridFineEstimator::Pcr: e.kind = EstimatorKind::Pcr; break;
-    case HybridFineEstimator::Liu: e.kind = EstimatorKind::Liu; break;
-    default: e.kind = EstimatorKind::Ols; break;
-  }
+  e.kind = estimator;
   return e;
 }
 
 }  // namespace
 
-const Estimate* HybridCalibration::estimate(HybridFineEstimator estimator) const {
+const Estimate* HybridCalibration::estimate(EstimatorKind estimator) const {
   if (!fine_done) return nullptr;
   switch (estimator) {
-    case HybridFineEstimator::Ols: return &ols;
-    case HybridFineEstimator::Liu: return &liu;
-    case HybridFineEstimator::Ridge: return &ridge;
-    case HybridFineEstimator::Pcr: return &pcr;
-    case HybridFineEstimator::None: break;
+    case EstimatorKind::Ols: return &ols;
+    case EstimatorKind::Liu: return &liu;
+    case EstimatorKind::Ridge: return &ridge;
+    case EstimatorKind::Pcr: return &pcr;
   }
   return nullptr;
 }
 
-Eigen::VectorXd HybridCalibration::chi(HybridFineEstimator estimator) const {
+Eigen::VectorXd HybridCalibration::chi(EstimatorKind estimator) const {
   if (fine_done) {
     switch (estimator) {
-      case HybridFineEstimator::Ols: return chi_ols;
-      case HybridFineEstimator::Liu: return chi_liu;
-      case HybridFineEstimator::Ridge: return chi_ridge;
-      case HybridFineEstimator::Pcr: return chi_pcr;
-      case HybridFineEstimator::None: break;
+      case EstimatorKind::Ols: return chi_ols;
+      case EstimatorKind::Liu: return chi_liu;
+      case EstimatorKind::Ridge: return chi_ridge;
+      case EstimatorKind::Pcr: return chi_pcr;
     }
   }
   return VectorXd::Zero(HybridErrorModel::kParameterCount);
 }
 
-HybridCompensation HybridCalibration::compensation(std::optional<HybridFineEstimator> which) const {
-  const HybridFineEstimator estimator = which.value_or(options.estimator);
+HybridCompensation HybridCalibration::compensation(std::optional<EstimatorKind> fine) const {
   HybridCompensation c;
   c.nominal = nominal;
   c.model = std::make_shared<const HybridErrorModel>(nominal);
   c.encoder_offsets = coarse_xi;
-  if (estimator != HybridFineEstimator::None && fine_done) {
-    const VectorXd x = chi(estimator);
+  if (fine && fine_done) {
+    const VectorXd x = chi(*fine);
     c.encoder_offsets += x.head<6>();
     c.structural = x;
     c.structural.head<6>().setZero();
@@ -345,10 +326,10 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // construction, so the design has full rank).
   auto solve = [&] {
     const PreparedDesign design(fp);
-    out.ols = estimate(design, fp, fine_options(options, HybridFineEstimator::Ols));
-    out.liu = estimate(design, fp, fine_options(options, HybridFineEstimator::Liu));
-    out.ridge = estimate(design, fp, fine_options(options, HybridFineEstimator::Ridge));
-    out.pcr = estimate(design, fp, fine_options(options, HybridFineEstimator::Pcr));
+    out.ols = estimate(design, fp, fine_options(options, EstimatorKind::Ols));
+    out.liu = estimate(design, fp, fine_options(options, EstimatorKind::Liu));
+    out.ridge = estimate(design, fp, fine_options(options, EstimatorKind::Ridge));
+    out.pcr = estimate(design, fp, fine_options(options, EstimatorKind::Pcr));
     for (Estimate* e : {&out.ols, &out.liu, &out.ridge, &out.pcr}) {
       e->x = e->x.cwiseQuotient(out.column_scale);
       e->standard_error = e->standard_error.cwiseQuotient(out.column_scale);
@@ -378,8 +359,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // estimator; a step that leaves a node's FK without a solution or grows the
   // residual 4-fold is halved. On data whose linearisation holds, the one
   // step stands unchanged.
-  HybridFineEstimator chosen = options.estimator == HybridFineEstimator::None ? HybridFineEstimator::Liu
-                                                                                : options.estimator;
+  EstimatorKind chosen = options.estimator;
   // Liu's shrinkage toward the coarse machine (Eq. (13)) is meant to remove
   // noise, so what it adds to the OLS residual should be of the order of the
   // noise over the shrunk directions. When the data reject that — the
@@ -388,13 +368,13 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // removing the machine's errors (large source errors before a first
   // calibration: d = 0.67 left 17 µm per gauge coordinate at 5 µm noise) and
   // the fine stage takes options.liu_fallback instead.
-  if (chosen == HybridFineEstimator::Liu && options.liu_fallback != HybridFineEstimator::None) {
+  if (chosen == EstimatorKind::Liu && options.liu_fallback) {
     const double n = static_cast<double>(fp.H.rows()), m = static_cast<double>(fp.H.cols());
     const double rss_ols = out.ols.residual.squaredNorm(), rss_liu = out.liu.residual.squaredNorm();
     out.liu_check_f = rss_ols > 0 ? ((rss_liu - rss_ols) / m) / (rss_ols / (n - m)) : 0.0;
     out.liu_check_p = f_distribution_upper_tail(std::max(out.liu_check_f, 0.0), m, n - m);
     if (out.liu_check_p < options.liu_alpha) {
-      chosen = options.liu_fallback;
+      chosen = *options.liu_fallback;
       out.options.estimator = chosen;
     }
   }
@@ -484,8 +464,8 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     if (!valid && out.linearisations.size() > 1) {
       // Ended on a damped step or the iteration limit: the model is the point
       // reached (`at`), not the last full step.
-      const bool ols = chosen == HybridFineEstimator::Ols, ridge = chosen == HybridFineEstimator::Ridge,
-                 pcr = chosen == HybridFineEstimator::Pcr;
+      const bool ols = chosen == EstimatorKind::Ols, ridge = chosen == EstimatorKind::Ridge,
+                 pcr = chosen == EstimatorKind::Pcr;
       (ols ? out.ols : ridge ? out.ridge : pcr ? out.pcr : out.liu).x = kept_values(at);
       (ols ? out.chi_ols : ridge ? out.chi_ridge : pcr ? out.chi_pcr : out.chi_liu) = at;
     }
@@ -701,17 +681,16 @@ HybridMonteCarlo hybrid_monte_carlo(const HybridCalibration& calibration, int ru
 }
 
 CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal,
-                              std::optional<HybridFineEstimator> which, const std::string& data_file) {
+                              std::optional<EstimatorKind> fine, const std::string& data_file) {
   if (!nominal.is_hybrid()) throw InputError("hybrid_model needs a hybrid robot");
-  const HybridFineEstimator estimator = which.value_or(cal.options.estimator);
   CalibrationModel m;
   m.nominal = nominal;
   m.nominal.source_errors.resize(0);
   m.data_file = data_file;
-  const HybridCompensation c = cal.compensation(estimator);
+  const HybridCompensation c = cal.compensation(fine);
   const HybridErrorModel& em = *c.model;
-  const Estimate* est = cal.estimate(estimator);
-  m.estimator = to_string(estimator);
+  const Estimate* est = fine ? cal.estimate(*fine) : nullptr;
+  m.estimator = fine ? to_string(*fine) : "coarse-ols";
   auto se = [&](std::size_t column) {
     return est != nullptr && est->standard_error.size() > static_cast<Index>(column)
                ? est->standard_error(static_cast<Index>(column))
@@ -728,7 +707,7 @@ CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal
     }
     for (const std::string& name : cal.dropped_names) m.parameters.push_back({name, 0.0, 0.0, false});
   }
-  if (est != nullptr) m.settings = estimator_settings(*est, fine_options(cal.options, estimator));
+  if (est != nullptr) m.settings = estimator_settings(*est, fine_options(cal.options, *fine));
   m.settings["eps_xi"] = cal.coarse_history.empty() ? 0.0 : cal.coarse_history.back().relative_change;
   m.settings["coarse_iterations"] = static_cast<double>(cal.coarse_history.size());
   m.settings["coarse_nodes"] = static_cast<double>(cal.coarse_ids.size());
@@ -737,6 +716,10 @@ CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal
   m.settings["cal_nodes"] = static_cast<double>(cal.cal_nodes);
   if (cal.options.scale_columns) m.settings["scale_columns"] = 1;
   return m;
+}
+
+CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal, const std::string& data_file) {
+  return hybrid_model(nominal, cal, cal.options.estimator, data_file);
 }
 
 HybridCompensation hybrid_compensation_from_model(const CalibrationModel& model) {

@@ -36,8 +36,9 @@ class HybridFamily final : public Family {
   const std::vector<ParameterSpec>& parameter_specs() const override;
   std::string alias_of(const std::string& name) const override;
   detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
-                             const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
-                             bool finish_least_squares, double ridge_k) const override;  // hybrid_base_fit.cpp
+                             const std::vector<std::optional<EffectNode>>& nodes,
+                             std::optional<EstimatorKind> estimator, bool finish_least_squares,
+                             double ridge_k) const override;  // hybrid_base_fit.cpp
   const char* error_model() const override { return "seed 000 source-error model"; }
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;

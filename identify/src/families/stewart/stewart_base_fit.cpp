@@ -9,8 +9,8 @@
 namespace kincal::identify {
 
 detail::BaseModel StewartFamily::fit_base(const Robot& robot, const PoseTable& data,
-                                          const std::vector<std::optional<EffectNode>>& en, const std::string&,
-                                          bool, double) const {
+                                          const std::vector<std::optional<EffectNode>>& en,
+                                          std::optional<EstimatorKind>, bool, double) const {
   using namespace detail;  // seed 001's model is fitted by OLS, to its minimum
   const StewartCalibration cal = calibrate_stewart(robot, data);
   const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits

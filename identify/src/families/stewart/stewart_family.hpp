@@ -30,8 +30,9 @@ class StewartFamily final : public Family {
 
   const std::vector<ParameterSpec>& parameter_specs() const override;
   detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
-                             const std::vector<std::optional<EffectNode>>& nodes, const std::string& estimator,
-                             bool finish_least_squares, double ridge_k) const override;  // stewart_base_fit.cpp
+                             const std::vector<std::optional<EffectNode>>& nodes,
+                             std::optional<EstimatorKind> estimator, bool finish_least_squares,
+                             double ridge_k) const override;  // stewart_base_fit.cpp
   const char* error_model() const override { return "seed 001 42-parameter model"; }
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
