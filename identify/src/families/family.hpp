@@ -152,9 +152,6 @@ class Family {
   virtual std::string missing_measurement(const Robot& robot, const PoseTable& data) const = 0;
   // The family's own measurement, as messages name it ("the hybrid's gauge").
   virtual const char* own_measurement() const = 0;
-  // Target columns a table of the family's own measurement carries (the
-  // gauge's three on the hybrid).
-  virtual int own_target_count() const { return 0; }
   // The actual machine of a simulation (nominal and actual are this family's).
   virtual std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const = 0;
   // The family's own targets (the hybrid's gauge) on `robot`, if it has any:

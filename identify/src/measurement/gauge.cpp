@@ -57,15 +57,15 @@ void identification_jacobian(const HybridErrorModel& model, MeasurementKind kind
   const Eigen::Index r = measurement_rows(kind);
   const Eigen::Index n = static_cast<Eigen::Index>(nodes.size());
   if (H.rows() != r * n || H.cols() != model.size()) H.resize(r * n, model.size());
-  Eigen::MatrixXd B(6, model.size()), M(r, 6);
+  const MeasurementModel measurement = measurement_model(kind, model.nominal(), radius);
+  Eigen::MatrixXd B(6, model.size());
   for (Eigen::Index k = 0; k < n; ++k) {
     const Pose<double>& node = nodes[static_cast<std::size_t>(k)];
     const Status st = model.error_jacobian(node, B);
     if (st != Status::Ok)
       throw InputError("identification Jacobian: node " + std::to_string(k) + ": error model failed (" + to_string(st) +
                        ")");
-    measurement_map(kind, model.nominal(), radius, node, M);
-    H.middleRows(k * r, r).noalias() = M * B;
+    H.middleRows(k * r, r).noalias() = measurement.map(node) * B;
   }
 }
 

@@ -172,11 +172,12 @@ class DesignRows {
     PlanMeasure m = o.measure;
     const Family& family = family_of(robot);
     // The family's own instrument: the full pose, or its targets (the hybrid's gauge).
-    if (m == PlanMeasure::Default) m = family.own_target_count() > 0 ? PlanMeasure::Targets : PlanMeasure::Pose;
+    const std::optional<MeasurementModel> own = family.own_targets(robot);
+    if (m == PlanMeasure::Default) m = own ? PlanMeasure::Targets : PlanMeasure::Pose;
     sigma_mm_ = o.noise_mm;
     sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
     if (m == PlanMeasure::Pose) {
-      if (family.own_target_count() > 0)
+      if (own)
         notes.push_back(std::string("kincal identify reads ") + family.own_measurement() +
                         " targets (t1..t3), not full poses; this plan's numbers are for a full-pose instrument");
     } else if (!robot.targets.empty()) {
@@ -184,7 +185,7 @@ class DesignRows {
       notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "
                       "it); with identify --instrument-frame the tracker's registration is identified as well, and "
                       "the frames are then the weakest part (docs/identify.md \"Laser-tracker targets\")");
-    } else if (const std::optional<MeasurementModel> own = family.own_targets(robot)) {
+    } else if (own) {
       model_ = *own;
     } else {
       throw InputError(robot.name, 0, 0,

@@ -71,7 +71,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     throw InputError("--instrument-frame applies to target measurements (--targets)");
   PoseTable out = poses;
   out.has_measured = !tracker;
-  out.target_count = tracker ? int(options.targets.size()) : family.own_target_count();
+  out.target_count = tracker ? int(options.targets.size()) : own_targets ? own_targets->rows() / 3 : 0;
   out.has_targets = out.target_count > 0;
   out.has_status = false;
   out.ignored_columns.clear();

@@ -44,7 +44,6 @@ class HybridFamily final : public Family {
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
 
   bool reads_own_measurement(const Robot& robot, const PoseTable&) const override { return robot.targets.empty(); }
-  int own_target_count() const override { return 3; }
   std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;
   const char* own_measurement() const override { return "the hybrid's gauge"; }
   std::optional<MeasurementModel> own_targets(const Robot& robot) const override {
