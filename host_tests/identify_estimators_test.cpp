@@ -5,9 +5,7 @@
 // Monte Carlo checks are seeded.
 #include <gtest/gtest.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -8,12 +8,18 @@
 //   differences of the family's own nonlinear pose (FamilyErrors::pose);
 // - the description against a write → parse → write round trip;
 // - the simulated machine with no errors against the commanded pose;
-// - the measurement model's map against finite differences of its prediction.
+// - the measurement model's map against finite differences of its prediction;
+// - every joint-space effect's identification columns (derivatives of core's
+//   correction by automatic differentiation) against central finite
+//   differences of the family's nonlinear pose at the commands core's
+//   effect_joint_error moves, in double; with the five built-ins and a user
+//   effect nonlinear in q that this test writes and registers itself.
 // Robots: the two built-ins and a hexapod of another size (legs 0.6–1.1 m),
 // at home and at poses drawn at random around it (not a grid).
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 #include <random>
 #include <set>
 #include <string>
@@ -21,7 +27,9 @@
 
 #include "../identify/src/families/family.hpp"
 #include "../identify/src/families/family_errors.hpp"
+#include "kincal/core/effects.hpp"
 #include "kincal/identify/calibration_table.hpp"
+#include "kincal/identify/effects.hpp"
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/robot.hpp"
@@ -215,6 +223,57 @@ TEST_P(FamilySeam, AModelWithoutErrorsGivesATableThatPassesItsCheck) {
 // targets seen from a turned and shifted instrument, seed 000's gauge (the
 // hybrid family's own targets) and one target at the tool point; and the
 // full pose's map against pose_error of the twisted pose.
+// A user joint effect of another shape than the built-ins (nonlinear in q,
+// coupling two joints), written once as a template.
+template <class Scalar>
+Scalar wobble(const Scalar* u, int joint, const Vec6<Scalar>& q, const kincal::EffectInputs<Scalar>& in) {
+  using std::sin;
+  const Scalar other = q((joint + 1) % 6);
+  return u[0] * sin(q(joint) / Scalar(7)) + u[1] * other * other * Scalar(1e-3) + u[2] * in.direction(joint);
+}
+
+TEST_P(FamilySeam, EffectColumnsAreTheDerivativeOfCoresCorrectionOnTheFamilysPose) {
+  ki::register_effect(std::make_shared<ki::UserJointEffect>("wobble", "test: nonlinear in q",
+                                                            std::vector<std::string>{"u1", "u2", "u3"},
+                                                            &wobble<double>, &wobble<ki::EffectDual>));
+  const std::unique_ptr<ki::detail::FamilyErrors> errors = ki::detail::family_errors(robot);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(errors->size());
+  const kincal::EffectParameters<double> frame = ki::effect_frame(robot);
+  const ki::Robot open = ki::without_limits(robot);
+  std::mt19937 rng(17);
+  int checked = 0;
+  for (const Pose<double>& commanded : poses_around_home(robot, 3, 23)) {
+    ki::EffectNode node;
+    node.pose = commanded;
+    ASSERT_TRUE(family.forward_jacobian(open, commanded, node.q, node.joint_twist));
+    node.inputs.load = kincal::static_load_forward(node.joint_twist, frame.load_direction);
+    for (int i = 0; i < 6; ++i) node.inputs.direction(i) = rng() % 2 ? 1.0 : -1.0;
+    for (const std::shared_ptr<const ki::Effect>& effect : ki::effect_registry()) {
+      if (!effect->acts_on_joints()) continue;
+      const int n = int(effect->parameter_names(robot).size());
+      Eigen::MatrixXd columns(6, n);
+      effect->twist_columns(robot, frame, node, columns);
+      for (int k = 0; k < n; ++k) {
+        // A step that moves the joints by ~1e-4 mm (rad).
+        const double h = 1e-4 / std::max(columns.col(k).norm(), 1e-3);
+        auto reached = [&](double value) {
+          Eigen::VectorXd values = Eigen::VectorXd::Zero(n);
+          values(k) = value;
+          kincal::EffectParameters<double> e = frame;
+          effect->apply(robot, values, e);
+          const Vec6<double> dq = kincal::effect_joint_error(e, node.q, node.inputs);
+          return pose_at(*errors, commanded, Vec6<double>(node.q + dq), zero);
+        };
+        const Vec6<double> fd = kincal::pose_error(reached(h), reached(-h)) / (2 * h);
+        EXPECT_LT((fd - columns.col(k)).norm(), 1e-5 * std::max(1.0, columns.col(k).norm()))
+            << effect->name() << " " << effect->parameter_names(robot)[std::size_t(k)];
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 3 * 20);  // scale, backlash, compliance (6 each), cyclic, wobble's 3, per pose
+}
+
 TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
   const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
   const Pose<double> registration = Pose<double>::from_xyz_rpy(1500, -200, 300, 0.1, -0.2, 2.1);

@@ -6,7 +6,7 @@
 // the identifiable set for two pure-translation layers (seed 000 Section 4.1).
 #include <gtest/gtest.h>
 
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -4,9 +4,8 @@
 // with planted dependencies.
 #include <gtest/gtest.h>
 
-#include <Eigen/Eigenvalues>
+#include "kincal/identify/decompositions.hpp"
 #include <Eigen/Geometry>
-#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -6,7 +6,7 @@
 // hexapod, random candidate poses drawn here, unreachable candidates).
 #include <gtest/gtest.h>
 
-#include <Eigen/Cholesky>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <numeric>
 #include <cmath>

@@ -1,15 +1,17 @@
 // A user effect added from outside the library (examples/user-effect/
-// quadratic_lead.hpp, walked through in docs/effects.md): both halves, the
-// identification half registered at start-up, the controller half plugged
-// into core's compensator. On data from a 6-UPS whose screws carry it, the
-// diagnosis must name and accept it, identification must fit it, and the
-// compensator with the plug-in must bring the held-out error down to the
-// noise floor (and without the plug-in it must not).
+// quadratic_lead.hpp, walked through in docs/effects.md): one templated
+// function, registered at start-up (its identification columns are its
+// derivative) and plugged into core's compensator. On data from a 6-UPS
+// whose screws carry it, the diagnosis must name and accept it,
+// identification must fit it, and the compensator with the plug-in must
+// bring the held-out error down to the noise floor (and without the plug-in
+// it must not).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
@@ -41,7 +43,7 @@ struct Plant {
 // drift on legs 2 and 5 (up to ~35 µm at the stroke ends).
 const Plant& plant() {
   static const Plant p = [] {
-    ki::register_effect(std::make_shared<quadratic_lead::Effect>());
+    ki::register_effect(quadratic_lead::effect());
     Plant out;
     out.nominal = ki::builtin_robot("stewart-seed001");
     out.actual = ki::apply_parameters(out.nominal, ki::read_parameters(kDir + "/errors.csv", out.nominal));
@@ -169,6 +171,19 @@ TEST(UserEffect, TwoEffectsCannotShareTheControllerSlot) {
   ki::EffectValues both = p.truth;
   both.set(p.nominal, "other_user_effect", "u", 1.0);
   EXPECT_THROW(both.to_core(p.nominal), ki::InputError);
+}
+
+// A user effect is its function and a registration; what core's one slot
+// cannot hold is refused when the effect is made, not when it is used.
+TEST(UserEffect, WhatCoresSlotCannotHoldIsRefusedWhenTheEffectIsMade) {
+  const auto f = &quadratic_lead::joint_error<double>;
+  const auto fd = &quadratic_lead::joint_error<ki::EffectDual>;
+  EXPECT_NO_THROW(ki::UserJointEffect("ok", "d", {"u1"}, f, fd));
+  EXPECT_THROW(ki::UserJointEffect("", "d", {"u1"}, f, fd), std::invalid_argument);
+  EXPECT_THROW(ki::UserJointEffect("none", "d", {}, f, fd), std::invalid_argument);
+  EXPECT_THROW(ki::UserJointEffect("nine", "d", {"1", "2", "3", "4", "5", "6", "7", "8", "9"}, f, fd),
+               std::invalid_argument);
+  EXPECT_THROW(ki::UserJointEffect("no_derivative", "d", {"u1"}, f, nullptr), std::invalid_argument);
 }
 
 }  // namespace

@@ -174,7 +174,7 @@ nlohmann::json summary_start(const IdentifyArgs& a, const ki::Robot& robot) {
 // seed 000's pipeline: coarse encoder offsets by iterated OLS (Eq. (15)), then
 // the identifiable source errors by Liu (Eq. (11), d of Eq. (14)), OLS, ridge
 // or PCR.
-int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
+int run_identify_hybrid_gauge(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
   std::string estimator = a.estimator.empty() ? "liu" : a.estimator;
   ki::EstimatorOptions eo = estimator_options(a, estimator);
   ki::HybridCalibrationOptions ho;
@@ -393,30 +393,9 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
-}  // namespace
-
-int run_identify(const IdentifyArgs& a) {
-  std::vector<std::string> outs{a.out};
-  if (!a.json.empty()) outs.push_back(a.json);
-  ki::check_outputs(outs, identify_inputs(a));
-  const ki::Robot robot = ki::load_robot(a.robot);
-  if (!a.effects.empty()) {
-    // --ridge-k with --effects: "gcv" (default) or a number (hkb needs the
-    // linear problem's full-rank OLS, which the passes do not form).
-    if (a.ridge_k == "hkb") throw ki::InputError("--ridge-k hkb with --effects: give gcv or a number");
-    if (!a.ridge_k.empty() && a.estimator != "ridge")
-      throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
-                           (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
-    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
-    (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
-    return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
-                                                 k, a.keep_outliers, a.instrument_frame);
-  }
-  if (robot.is_hybrid()) {
-    const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
-    if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
-    return run_identify_hybrid(a, robot, data);
-  }
+// The 6-UPS's own pipeline (seed 001's iterated least squares) and its
+// narrative: the iterations, the outlier screen, the residuals.
+int run_identify_stewart(const IdentifyArgs& a, const ki::Robot& robot) {
   const std::string estimator = a.estimator.empty() ? "ols" : a.estimator;
   if (estimator == "liu")
     throw ki::InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
@@ -470,5 +449,52 @@ int run_identify(const IdentifyArgs& a) {
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
+// The hybrid's: target columns go to the target fit, the gauge to seed 000's
+// coarse + fine pipeline.
+int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot) {
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
+  if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
+  return run_identify_hybrid_gauge(a, robot, data);
+}
+
+// Each family's own pipeline and narrative (its stages print differently):
+// one line per family, keyed by the description's `family`
+// (identify/src/families/families.cpp registers the families themselves).
+struct Narrative {
+  const char* family;
+  int (*run)(const IdentifyArgs&, const ki::Robot&);
+};
+constexpr Narrative kNarratives[] = {
+    {ki::kStewartFamily, run_identify_stewart},
+    {ki::kHybridFamily, run_identify_hybrid},
+};
+
+}  // namespace
+
+int run_identify(const IdentifyArgs& a) {
+  std::vector<std::string> outs{a.out};
+  if (!a.json.empty()) outs.push_back(a.json);
+  ki::check_outputs(outs, identify_inputs(a));
+  const ki::Robot robot = ki::load_robot(a.robot);
+  if (!a.effects.empty()) {
+    // --ridge-k with --effects: "gcv" (default) or a number (hkb needs the
+    // linear problem's full-rank OLS, which the passes do not form).
+    if (a.ridge_k == "hkb") throw ki::InputError("--ridge-k hkb with --effects: give gcv or a number");
+    if (!a.ridge_k.empty() && a.estimator != "ridge")
+      throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
+                           (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
+    const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
+    (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
+    return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
+                                                 k, a.keep_outliers, a.instrument_frame);
+  }
+  for (const Narrative& n : kNarratives)
+    if (std::string(n.family) == robot.family()) return n.run(a, robot);
+  // A family without a narrative of its own: tracker targets, by the target fit.
+  const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
+  if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
+  throw ki::InputError(std::string("identify: the ") + robot.family() +
+                       " family's own measurement has no pipeline here yet; measure tracker targets (t1x,t1y,t1z)");
+}
 
 }  // namespace kincal_app

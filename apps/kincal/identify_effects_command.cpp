@@ -42,7 +42,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   };
   const Fit all = fit(data);
   ki::SequentialOutlierOptions so;
-  so.min_nodes = robot.is_hybrid() ? 7 : 8;
+  so.min_nodes = robot.outlier_min_nodes();
   ki::ScreenedFit<Fit> screened = ki::screen_and_refit(
       data, all, [](const Fit& f) -> const ki::LinearProblem& { return f.report.final_problem; },
       [](const Fit& f) -> const std::vector<ki::NodeTest>& { return f.report.nodes; }, fit, so);

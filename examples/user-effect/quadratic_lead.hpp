@@ -1,4 +1,6 @@
-// A user effect, both halves (docs/effects.md walks through it): the lead of
+// A user effect (docs/effects.md walks through it): one templated function,
+// which the controller runs and the identification differentiates, and its
+// registration. The physics: the lead of
 // each ball screw of a 6-UPS drifts linearly along its stroke, so the
 // position error it accumulates grows with the square of the distance from
 // mid-stroke:
@@ -30,38 +32,21 @@ Scalar joint_error(const Scalar* u, int joint, const kincal::Vec6<Scalar>& q, co
 }  // namespace quadratic_lead
 
 #ifndef QUADRATIC_LEAD_CONTROLLER_ONLY
-// Identification half (host only): the sensitivity columns and where the
-// identified values go. Registered with kincal::identify::register_effect.
+// Identification half (host only): the same function, registered. Its
+// identification columns are its derivative (automatic differentiation at
+// kincal::identify::EffectDual), so nothing else is written.
+#include <memory>
+
 #include "kincal/identify/effects.hpp"
 
 namespace quadratic_lead {
 
-class Effect final : public kincal::identify::Effect {
- public:
-  std::string name() const override { return "quadratic_lead"; }
-  std::string description() const override {
-    return "ball-screw lead drifting along the stroke, dq_i = w_i (q_i - m)^2";
-  }
-  std::vector<std::string> parameter_names(const kincal::identify::Robot&) const override {
-    return {"w1", "w2", "w3", "w4", "w5", "w6"};
-  }
-  // Needs only the joint commands, which every data set has (or implies).
-  std::string missing_inputs(const kincal::identify::PoseTable&) const override { return {}; }
-  // Tool twist per unit w_i: joint i's error twist times ∂Δq_i/∂w_i = (q_i − m)².
-  void twist_columns(const kincal::identify::Robot&, const kincal::EffectParameters<double>&,
-                     const kincal::identify::EffectNode& node, Eigen::Ref<Eigen::MatrixXd> columns) const override {
-    for (int i = 0; i < 6; ++i) {
-      const double d = node.q(i) - kMidStroke;
-      columns.col(i) = node.joint_twist.col(i) * (d * d);
-    }
-  }
-  // The numbers go to core's user slot, the function with them.
-  void apply(const kincal::identify::Robot&, const Eigen::VectorXd& values,
-             kincal::EffectParameters<double>& out) const override {
-    for (int i = 0; i < 6; ++i) out.user(i) += values(i);
-    out.user_error = &joint_error<double>;
-  }
-};
+inline std::shared_ptr<const kincal::identify::Effect> effect() {
+  return std::make_shared<kincal::identify::UserJointEffect>(
+      "quadratic_lead", "ball-screw lead drifting along the stroke, dq_i = w_i (q_i - m)^2",
+      std::vector<std::string>{"w1", "w2", "w3", "w4", "w5", "w6"}, &joint_error<double>,
+      &joint_error<kincal::identify::EffectDual>);
+}
 
 }  // namespace quadratic_lead
 #endif

@@ -13,7 +13,7 @@
 #include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/target_calibration.hpp"
 
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "effects/base_fit.hpp"
 
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <limits>
 

@@ -60,6 +60,47 @@ inline Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
   return row.q ? Vec6<double>(row.q->head<6>()) : node.q;
 }
 
+// A family's base fit as a state that Gauss–Newton steps together with the
+// effect parameters (joint_fit, effect_calibration.cpp): where the base is
+// nearly collinear with the effects (the hybrid's compliance is 99.9 %
+// confounded with it), fitting the base to its minimum and then the effects
+// in turn creeps along those directions; one step of both moves along them
+// at once. Family::stepped_base_fit makes one; a family whose own fit
+// converges alone (the 6-UPS, seed 001's iterated LS) offers none, and its
+// effects alternate with fit_base.
+class SteppedBaseFit {
+ public:
+  virtual ~SteppedBaseFit() = default;
+  // The number of base parameters χ the steps move (the design's columns).
+  virtual Eigen::Index parameters() const = 0;
+  // k of the ridge penalty k·‖χ − χ_centre‖² (0: none) and its centre's
+  // name in reports ("seed 000's coarse machine").
+  virtual double penalty() const = 0;
+  virtual void set_penalty(double k) = 0;
+  virtual const char* centre() const = 0;
+  // χ − χ_centre: a penalised step adds the rows √k·Δχ = −√k·away().
+  virtual Eigen::VectorXd away() const = 0;
+  // The centre recomputed on `data` (the measurements corrected for the
+  // effects at their current values).
+  virtual void recentre(const PoseTable& data) = 0;
+  // χ += delta.
+  virtual void step(const Eigen::VectorXd& delta) = 0;
+  // Keep the current iterate / go back to the one kept (a damped
+  // Gauss–Newton's accepted step and its undo).
+  virtual void keep() = 0;
+  virtual void go_back() = 0;
+  // Start from the best, on `data`, of the family's own first estimate (if
+  // `own_estimate`), the current iterate (if `current`) and the family's
+  // fallback start: the one that models more nodes, then the lower objective.
+  virtual void start(const PoseTable& data, bool own_estimate, bool current) = 0;
+  // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
+  virtual BaseModel evaluate(const PoseTable& data, bool with_joint_map) const = 0;
+  // RSS of the cal rows of `base` plus the penalty.
+  virtual double objective(const BaseModel& base) const = 0;
+  // Description, model (the current χ), ridge_k and column_away of `base`.
+  virtual void finish(BaseModel& base, const std::string& data_file, int steps) const = 0;
+};
+
 // The family's own pipeline (Family::fit_base), or the target fit for target
 // data (either family).
 // `fit_data`: the table the base model is fitted on and compared with (the

@@ -1,17 +1,17 @@
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/target_calibration.hpp"
 
-#include <Eigen/QR>
-#include <Eigen/SVD>
 #include <cmath>
-#include <map>
 #include <limits>
-#include <sstream>
+#include <map>
+#include <memory>
 #include <optional>
+#include <sstream>
 
 #include "effects/base_fit.hpp"
 #include "estimate/least_squares_step.hpp"
-#include "families/hybrid/hybrid_base_fit.hpp"
+#include "families/family.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -205,27 +205,28 @@ double joint_gcv_k(const MatrixXd& X, const VectorXd& z, Index p) {
   return best;
 }
 
-// The hybrid's base and effects in one Gauss–Newton (issue #14): at each
+// A stepped base (the hybrid's) and the effects in one Gauss–Newton (issue
+// #14; effects/base_fit.hpp's SteppedBaseFit): at each
 // iterate the measurements are corrected for the effects at their current
 // values, the base is evaluated there (residual, design H, the joint maps)
 // and χ and the free effect parameters take one step together on [H G],
 // with the base's ridge rows √k·(χ − χ_coarse) when the base is "ridge"
 // (effects unpenalised). The alternation (fit the base to its minimum, then
-// one step for the effects) ran seed 000's coarse + fine pipeline in every
+// one step for the effects) ran the hybrid's coarse + fine pipeline in every
 // pass and crept along the nearly collinear base/effect directions (the
 // hybrid's compliance is 99.9 % confounded with the base); the joint step
 // moves along them at once. A step that raises the objective (RSS + penalty)
 // or loses a node is undone and damped (detail::damped_gauss_newton).
 detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
-                            const EffectCalibrationOptions& options, detail::HybridBaseFit& fit,
-                            const std::vector<HybridCompensation>& starts, EffectValues& values,
+                            const EffectCalibrationOptions& options, detail::SteppedBaseFit& fit,
+                            bool from_own_estimate, bool from_current, EffectValues& values,
                             EffectCalibrationReport& rep) {
   const Index p = fit.parameters();
   const double penalty = fit.penalty();
   auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
-  fit.start_from_the_best(corrected(), starts);
-  HybridCompensation accepted_state = fit.state();
+  fit.start(corrected(), from_own_estimate, from_current);
+  fit.keep();
   EffectValues accepted_values = values;
   detail::BaseModel base;
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
@@ -237,11 +238,11 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         return detail::Evaluation{fit.objective(base), base.nodes.size()};
       },
       [&] {
-        accepted_state = fit.state();
+        fit.keep();
         accepted_values = values;
       },
       [&] {
-        fit.restore(accepted_state);
+        fit.go_back();
         values = accepted_values;
       },
       [&](MatrixXd& X, VectorXd& y) {
@@ -288,11 +289,15 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
     if (!missing.empty()) throw InputError(data.file, 0, 0, "effect '" + name + "' cannot be identified: " + missing);
     list.push_back(e);
   }
+  const Family& family = family_of(robot);
+  // A family that steps its base with the effects offers a ridge toward its
+  // centre; one that alternates fits its own base by OLS.
   if (options.estimator && *options.estimator != EstimatorKind::Ols &&
-      !(*options.estimator == EstimatorKind::Ridge && robot.is_hybrid()))
+      !(*options.estimator == EstimatorKind::Ridge && family.steps_base_with_effects()))
     throw InputError("--estimator " + std::string(to_string(*options.estimator)) +
                      " with --effects: the base is fitted by " +
-                     (robot.is_hybrid() ? "ols (default) or ridge" : "ols (seed 001's iterated least squares)"));
+                     (family.steps_base_with_effects() ? std::string("ols (default) or ridge")
+                                                       : "ols (" + std::string(family.base_fit()) + ")"));
   if (!(options.ridge_k >= 0)) throw InputError("--ridge-k must be a number >= 0 (0: by GCV)");
   const std::vector<std::optional<EffectNode>> nodes = effect_nodes(robot, data);
   EffectValues values;
@@ -304,7 +309,8 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   }
 
   EffectCalibrationReport rep;
-  // The hybrid: one joint Gauss–Newton of base and effects (joint_fit); its
+  // A family that steps its base with the effects (the hybrid): one joint
+  // Gauss–Newton of base and effects (joint_fit); its
   // base is chosen by joint_gcv_k at the OLS solution unless the options fix
   // it (ols: k = 0; ridge with --ridge-k: that k), then fitted again with
   // that k from there. Each elimination round fits OLS again and chooses k
@@ -316,47 +322,46 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   // 0): from seed 000's start alone, the damped steps of a later round could
   // stop short of the minimum (UPS-actuator scale, noise seed 5: RSS 20 %
   // above the previous round's with one parameter of t = −0.8 fewer, and the
-  // base 8 mm out). The 6-UPS: the alternation, whose base fit (seed 001's
-  // iterated LS) converges in a few rounds and is not shrunk.
-  std::optional<detail::HybridBaseFit> hybrid;
+  // base 8 mm out). Any other (the 6-UPS), and target data: the alternation,
+  // whose base fit (seed 001's iterated LS, the target fit) converges in a
+  // few rounds and is not shrunk.
+  std::unique_ptr<detail::SteppedBaseFit> stepped;
   const bool choose_k = options.estimator != EstimatorKind::Ols && !(options.ridge_k > 0);
   auto fit = [&]() {
-    if (!robot.is_hybrid() || uses_target_model(robot, data)) {  // target data: the target fit, either family
+    if (!family.steps_base_with_effects() || uses_target_model(robot, data)) {  // target data: the target fit, either family
       detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep);
-      rep.base = uses_target_model(robot, data) ? b.description : "seed 001's iterated least squares (OLS)";
+      rep.base = uses_target_model(robot, data) ? b.description : std::string(family.base_fit()) + " (OLS)";
       return b;
     }
-    std::vector<HybridCompensation> starts;
-    if (!hybrid) {
-      hybrid.emplace(robot, data, nodes, options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, true,
-                     options.ridge_k);
-      starts = {hybrid->seed_estimate()};
+    const bool first = !stepped;
+    if (first) {
+      stepped = family.stepped_base_fit(robot, data, nodes,
+                                        options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, options.ridge_k);
     } else {
-      starts = {hybrid->seed_estimate(), hybrid->state()};
-      hybrid->set_penalty(options.ridge_k);
+      stepped->set_penalty(options.ridge_k);
     }
-    detail::BaseModel b = joint_fit(robot, data, nodes, list, held, options, *hybrid, starts, values, rep);
+    detail::BaseModel b = joint_fit(robot, data, nodes, list, held, options, *stepped, true, !first, values, rep);
     if (!choose_k) {
-      rep.base = options.ridge_k > 0 ? "ridge toward seed 000's coarse machine, k = " + number(options.ridge_k) + " as given"
+      rep.base = options.ridge_k > 0 ? "ridge toward " + std::string(stepped->centre()) + ", k = " +
+                                           number(options.ridge_k) + " as given"
                                      : "OLS (as asked)";
       return b;
     }
-    // The ridge's centre: seed 000's coarse machine of the data as the base
-    // sees it (corrected for the effects at the OLS solution). The raw
-    // data's coarse encoder offsets carry an effect's mean (UPS-actuator
-    // scale: s·q̄ on each leg), and shrinking toward them pulled s toward 0
-    // (noise seed 11: s1 = 4.94e-4 for 5e-4, compensated 1.77 µm; recentred
-    // 5.05e-4, 1.53 µm).
-    if (!list.empty()) hybrid->recentre(detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)));
+    // The ridge's centre: the family's (seed 000's coarse machine) on the
+    // data as the base sees it (corrected for the effects at the OLS
+    // solution). The raw data's coarse encoder offsets carry an effect's
+    // mean (UPS-actuator scale: s·q̄ on each leg), and shrinking toward them
+    // pulled s toward 0 (noise seed 11: s1 = 4.94e-4 for 5e-4, compensated
+    // 1.77 µm; recentred 5.05e-4, 1.53 µm).
+    if (!list.empty()) stepped->recentre(detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)));
     MatrixXd H;
     VectorXd y;
     stack(b, false, H, y);
-    const double k = joint_gcv_k(joint_design(robot, list, held, b, H), y + H * hybrid->away(), H.cols());
-    hybrid->set_penalty(k);
-    rep.base = "ridge toward seed 000's coarse machine, k = " + number(k) +
-               " chosen by GCV on base" + (list.empty() ? "" : " + effects") +
-               " at the solution (k from 1e-12, OLS, to 1e4)";
-    return joint_fit(robot, data, nodes, list, held, options, *hybrid, {hybrid->state()}, values, rep);
+    const double k = joint_gcv_k(joint_design(robot, list, held, b, H), y + H * stepped->away(), H.cols());
+    stepped->set_penalty(k);
+    rep.base = "ridge toward " + std::string(stepped->centre()) + ", k = " + number(k) + " chosen by GCV on base" +
+               (list.empty() ? "" : " + effects") + " at the solution (k from 1e-12, OLS, to 1e4)";
+    return joint_fit(robot, data, nodes, list, held, options, *stepped, false, true, values, rep);
   };
   detail::BaseModel base = fit();
   // Backward elimination: an effect parameter the data cannot tell from the

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <utility>
 
 #include "families/family.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -21,29 +23,9 @@ std::vector<std::string> numbered(const std::string& prefix, int count) {
 // three UPS limbs of the hybrid.
 int screw_joint_count(const Robot& robot) { return family_of(robot).screw_joints(); }
 
-// The joint-space effects share one shape: the tool twist of joint i's error
-// times a per-node basis value; Δq_i = θ_i · basis_i (core/effects.hpp).
-class JointEffect : public Effect {
- public:
-  void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
-                     Eigen::Ref<Eigen::MatrixXd> columns) const override {
-    const int n = int(parameter_names(robot).size());
-    for (int k = 0; k < n; ++k) {
-      const int joint = joint_of(robot, k);
-      columns.col(k) = node.joint_twist.col(joint) * basis(frame, node, k, joint);
-    }
-  }
-  void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const override {
-    for (int k = 0; k < int(values.size()); ++k) store(out, k, joint_of(robot, k), values(k));
-  }
-
- protected:
-  virtual int joint_of(const Robot& /*robot*/, int k) const { return k; }
-  virtual double basis(const EffectParameters<double>& frame, const EffectNode& node, int k, int joint) const = 0;
-  virtual void store(EffectParameters<double>& out, int k, int joint, double value) const = 0;
-};
-
-class ScaleEffect final : public JointEffect {
+// The built-in joint-space effects: names and slots; their shapes are core's
+// effect_joint_error (JointSpaceEffect differentiates it).
+class ScaleEffect final : public JointSpaceEffect {
  public:
   std::string name() const override { return "scale"; }
   std::string description() const override { return "encoder / leadscrew scale error per actuated joint, dq_i = s_i q_i"; }
@@ -52,13 +34,10 @@ class ScaleEffect final : public JointEffect {
   std::string inputs() const override { return "joint commands q1..q6 (default: nominal IK of the commanded pose)"; }
 
  protected:
-  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
-    return node.q(joint);
-  }
-  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.scale(joint) += v; }
+  EffectSlot slot(const Robot&, int k) const override { return {EffectSlot::Scale, k}; }
 };
 
-class BacklashEffect final : public JointEffect {
+class BacklashEffect final : public JointSpaceEffect {
  public:
   std::string name() const override { return "backlash"; }
   std::string description() const override {
@@ -76,13 +55,10 @@ class BacklashEffect final : public JointEffect {
   }
 
  protected:
-  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
-    return node.inputs.direction(joint);
-  }
-  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.backlash(joint) += v; }
+  EffectSlot slot(const Robot&, int k) const override { return {EffectSlot::Backlash, k}; }
 };
 
-class ComplianceEffect final : public JointEffect {
+class ComplianceEffect final : public JointSpaceEffect {
  public:
   std::string name() const override { return "compliance"; }
   std::string description() const override {
@@ -93,13 +69,10 @@ class ComplianceEffect final : public JointEffect {
   std::string inputs() const override { return "the commanded pose (static load through the Jacobian)"; }
 
  protected:
-  double basis(const EffectParameters<double>&, const EffectNode& node, int, int joint) const override {
-    return node.inputs.load(joint);
-  }
-  void store(EffectParameters<double>& out, int, int joint, double v) const override { out.compliance(joint) += v; }
+  EffectSlot slot(const Robot&, int k) const override { return {EffectSlot::Compliance, k}; }
 };
 
-class CyclicEffect final : public JointEffect {
+class CyclicEffect final : public JointSpaceEffect {
  public:
   std::string name() const override { return "cyclic"; }
   std::string description() const override {
@@ -116,18 +89,10 @@ class CyclicEffect final : public JointEffect {
   }
 
  protected:
-  int joint_of(const Robot& robot, int k) const override { return k % screw_joint_count(robot); }
-  double basis(const EffectParameters<double>& frame, const EffectNode& node, int k, int joint) const override {
-    const double phase = 2.0 * pi<double>() * node.q(joint) / frame.screw_lead;
-    // k < screw count: the sine terms, then the cosine terms (parameter order).
-    const bool sine = k == joint;
-    return sine ? std::sin(phase) : std::cos(phase);
-  }
-  void store(EffectParameters<double>& out, int k, int joint, double v) const override {
-    if (k == joint)
-      out.cyclic_sin(joint) += v;
-    else
-      out.cyclic_cos(joint) += v;
+  // The sine terms of the screw-driven joints, then the cosine terms.
+  EffectSlot slot(const Robot& robot, int k) const override {
+    const int screws = screw_joint_count(robot);
+    return {k < screws ? EffectSlot::CyclicSin : EffectSlot::CyclicCos, k % screws};
   }
 };
 
@@ -170,6 +135,63 @@ std::vector<std::shared_ptr<const Effect>>& registry_storage() {
 }
 
 }  // namespace
+
+namespace {
+
+// The value of `slot` in core's parameters, at any scalar.
+template <class Scalar> Scalar& slot_in(EffectParameters<Scalar>& e, const EffectSlot& slot) {
+  switch (slot.field) {
+    case EffectSlot::Scale: return e.scale(slot.index);
+    case EffectSlot::Backlash: return e.backlash(slot.index);
+    case EffectSlot::Compliance: return e.compliance(slot.index);
+    case EffectSlot::CyclicSin: return e.cyclic_sin(slot.index);
+    case EffectSlot::CyclicCos: return e.cyclic_cos(slot.index);
+    case EffectSlot::User: break;
+  }
+  return e.user(slot.index);
+}
+
+}  // namespace
+
+void JointSpaceEffect::twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
+                                     Eigen::Ref<Eigen::MatrixXd> columns) const {
+  // core's Δq(θ; q, inputs) at EffectDual, seeded along one parameter at a
+  // time: ∂Δq/∂θ_k at the frame's values (every effect value 0 there; the
+  // built-in effects are linear in θ, so anywhere).
+  EffectParameters<EffectDual> at = frame.cast<EffectDual>();
+  at.user_error = user_function_dual();
+  const Vec6<EffectDual> q = node.q.cast<EffectDual>();
+  EffectInputs<EffectDual> in;
+  in.direction = node.inputs.direction.cast<EffectDual>();
+  in.load = node.inputs.load.cast<EffectDual>();
+  const int n = int(parameter_names(robot).size());
+  for (int k = 0; k < n; ++k) {
+    EffectParameters<EffectDual> seeded = at;
+    slot_in(seeded, slot(robot, k)).derivatives()(0) = 1.0;
+    const Vec6<EffectDual> dq = effect_joint_error(seeded, q, in);
+    Vec6<double> d;
+    for (int i = 0; i < 6; ++i) d(i) = dq(i).derivatives()(0);
+    columns.col(k) = node.joint_twist * d;
+  }
+}
+
+void JointSpaceEffect::apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const {
+  for (int k = 0; k < int(values.size()); ++k) slot_in(out, slot(robot, k)) += values(k);
+  if (user_function() != nullptr) out.user_error = user_function();
+}
+
+UserJointEffect::UserJointEffect(std::string name, std::string description, std::vector<std::string> parameters,
+                                 UserJointError<double> function, UserJointError<EffectDual> function_dual,
+                                 std::string inputs)
+    : name_(std::move(name)), description_(std::move(description)), parameters_(std::move(parameters)),
+      function_(function), function_dual_(function_dual), inputs_(std::move(inputs)) {
+  if (name_.empty()) throw std::invalid_argument("UserJointEffect: empty name");
+  if (parameters_.empty() || parameters_.size() > std::size_t(kUserEffectParameters))
+    throw std::invalid_argument("UserJointEffect '" + name_ + "': 1 to " + std::to_string(kUserEffectParameters) +
+                                " parameters (core's user slot), got " + std::to_string(parameters_.size()));
+  if (function_ == nullptr || function_dual_ == nullptr)
+    throw std::invalid_argument("UserJointEffect '" + name_ + "': the function at double and at EffectDual are both needed");
+}
 
 const std::vector<std::shared_ptr<const Effect>>& effect_registry() { return registry_storage(); }
 

@@ -2,9 +2,7 @@
 // and docs/estimators.md.
 #include "kincal/identify/estimators.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/QR>
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

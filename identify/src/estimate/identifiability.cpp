@@ -2,8 +2,7 @@
 // indices, collinearity report. See identifiability.hpp and docs/estimators.md.
 #include "kincal/identify/identifiability.hpp"
 
-#include <Eigen/QR>
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

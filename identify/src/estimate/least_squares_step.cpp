@@ -1,6 +1,6 @@
 #include "estimate/least_squares_step.hpp"
 
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <cmath>
 
 namespace kincal::identify::detail {

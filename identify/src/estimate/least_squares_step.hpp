@@ -4,7 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <cstddef>
 #include <limits>
 

@@ -1,7 +1,6 @@
 #include "kincal/identify/target_calibration.hpp"
 
-#include <Eigen/Eigenvalues>
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -5,6 +5,7 @@
 
 #include "families/hybrid/hybrid_family.hpp"
 #include "families/stewart/stewart_family.hpp"
+#include "effects/base_fit.hpp"
 #include "families/family_errors.hpp"
 #include "kincal/identify/joint_limits.hpp"
 
@@ -17,6 +18,14 @@ const HybridFamily kHybrid;
 const Family* const kFamilies[] = {&kStewart, &kHybrid};
 
 }  // namespace
+
+// A family offers no stepped base fit unless it says so (effects alternate
+// with its fit_base).
+std::unique_ptr<detail::SteppedBaseFit> Family::stepped_base_fit(const Robot&, const PoseTable&,
+                                                                 const std::vector<std::optional<EffectNode>>&,
+                                                                 EstimatorKind, double) const {
+  return nullptr;
+}
 
 const Family& family_of(const Robot& robot) {
   for (const Family* f : kFamilies)

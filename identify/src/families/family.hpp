@@ -39,6 +39,7 @@ namespace detail {
 struct BaseModel;
 class DescriptionReader;
 class FamilyErrors;
+class SteppedBaseFit;  // effects/base_fit.hpp
 }  // namespace detail
 
 // A passive joint the description bounds (the hybrid's UP extension c).
@@ -136,6 +137,26 @@ class Family {
                                      const std::vector<std::optional<EffectNode>>& nodes,
                                      std::optional<EstimatorKind> estimator, bool finish_least_squares,
                                      double ridge_k) const = 0;
+
+  // How the family's own base fit reads in messages ("seed 001's iterated
+  // least squares").
+  virtual const char* base_fit() const = 0;
+  // The fewest nodes the deleted-node screen of the family's own fit leaves
+  // (identify/outliers.hpp; identify --effects screens with the same).
+  virtual Eigen::Index outlier_min_nodes() const = 0;
+  // With effects (effect_calibration.cpp): whether the base takes its
+  // Gauss–Newton steps together with the effects' (stepped_base_fit) rather
+  // than alternate with them.
+  virtual bool steps_base_with_effects() const { return false; }
+  // With effects (effect_calibration.cpp): the base fit as a state the joint
+  // Gauss–Newton of base and effects steps (effects/base_fit.hpp), by OLS or
+  // a ridge toward its centre (k as fit_base's ridge_k; ridge_k = 0 is the
+  // family's own choice, later replaced by set_penalty). nullptr: the
+  // family's fit_base converges alone and the effects alternate with it.
+  virtual std::unique_ptr<detail::SteppedBaseFit> stepped_base_fit(const Robot& robot, const PoseTable& start,
+                                                                   const std::vector<std::optional<EffectNode>>& nodes,
+                                                                   EstimatorKind estimator,
+                                                                   double ridge_k) const;  // families.cpp
 
   // ---- the controller's table (calibration_table.hpp): the machine part
   // and the default bounds of the model's table; calibration_table.cpp adds

@@ -44,6 +44,7 @@ Status Robot::inverse(const Pose<double>& pose, Vec6<double>& q) const {
 bool Robot::revolute(int joint) const { return family_of(*this).revolute(joint); }
 const char* Robot::target_body() const { return family_of(*this).target_body(); }
 const char* Robot::error_model() const { return family_of(*this).error_model(); }
+Eigen::Index Robot::outlier_min_nodes() const { return family_of(*this).outlier_min_nodes(); }
 
 // ---------------------------------------------------------------- built-ins
 

@@ -3,9 +3,7 @@
 // order, and the same numbers for a grid and a random design of the same size.
 #include "kincal/identify/plan.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/QR>
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <array>
 #include <chrono>

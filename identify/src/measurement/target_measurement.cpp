@@ -1,6 +1,6 @@
 #include "kincal/identify/target_measurement.hpp"
 
-#include <Eigen/SVD>
+#include "kincal/identify/decompositions.hpp"
 
 namespace kincal::identify {
 

@@ -4,11 +4,14 @@
 // whether a data set carries the inputs it needs, gives its sensitivity
 // columns (tool twist per unit parameter at a node, in the robot's pose
 // frame), and stores identified values into core's EffectParameters. The five
-// candidates of the GUIDE are registered by default; a user effect is one
-// class and one register_effect() call (docs/effects.md walks through one).
+// candidates of the GUIDE are registered by default. A joint-space effect is
+// written once, in core: its columns here are the derivative of core's
+// correction (JointSpaceEffect); a user effect is one templated function and
+// one register_effect() call (UserJointEffect; docs/effects.md walks through one).
 #pragma once
 
 #include <Eigen/Core>
+#include <unsupported/Eigen/AutoDiff>  // after Eigen/Core, which it needs
 #include <map>
 #include <memory>
 #include <optional>
@@ -57,6 +60,74 @@ class Effect {
   // writes its numbers to out.user and its function to out.user_error (core
   // has one such slot; docs/effects.md).
   virtual void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const = 0;
+};
+
+// The scalar identify differentiates core's corrections with: a value and
+// its derivative along one parameter (forward-mode automatic
+// differentiation, Eigen's AutoDiffScalar; fixed size, no heap).
+using EffectDual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 1, 1>>;
+
+// Where one effect parameter lives in core's EffectParameters.
+struct EffectSlot {
+  enum Field { Scale, Backlash, Compliance, CyclicSin, CyclicCos, User };
+  Field field = Scale;
+  int index = 0;  // the joint (0..5), or the user number (0..kUserEffectParameters − 1)
+};
+
+// A joint-space effect written once. Its definition is core's
+// effect_joint_error (core/effects.hpp: what the simulator adds and the
+// controller inverts); a subclass names its parameters and says where each
+// lives in core's EffectParameters (slot). The identification columns are
+// that function's derivative along each parameter, by automatic
+// differentiation at EffectDual, times the joint's error twist:
+//   column_k = joint_twist · ∂Δq/∂θ_k,
+// so what is identified is, to rounding, what is compensated (test
+// FamilySeam.EffectColumnsAreTheDerivativeOfCoresCorrectionOnTheFamilysPose).
+class JointSpaceEffect : public Effect {
+ public:
+  void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
+                     Eigen::Ref<Eigen::MatrixXd> columns) const final;
+  // Adds each value to its slot (and sets core's user function, if any).
+  void apply(const Robot& robot, const Eigen::VectorXd& values, EffectParameters<double>& out) const override;
+
+ protected:
+  // Where parameter k (parameter_names order) lives.
+  virtual EffectSlot slot(const Robot& robot, int k) const = 0;
+  // A user joint effect's function at the controller's scalar and at
+  // EffectDual; null for the built-in effects.
+  virtual UserJointError<double> user_function() const { return nullptr; }
+  virtual UserJointError<EffectDual> user_function_dual() const { return nullptr; }
+};
+
+// A user joint effect (docs/effects.md): core's one user slot, its function
+// written once as a template and handed in at two scalars, double (what the
+// simulator, the identification's corrected data and the host compensator
+// run) and EffectDual (its derivative, the identification columns). The
+// parameters are u_1.. of the slot, in the order named (at most
+// kUserEffectParameters). Throws std::invalid_argument for an empty name,
+// no or too many parameters, or a null function.
+class UserJointEffect final : public JointSpaceEffect {
+ public:
+  UserJointEffect(std::string name, std::string description, std::vector<std::string> parameters,
+                  UserJointError<double> function, UserJointError<EffectDual> function_dual,
+                  std::string inputs = "the joint commands q1..q6 (default: nominal IK of the commanded pose)");
+  std::string name() const override { return name_; }
+  std::string description() const override { return description_; }
+  std::vector<std::string> parameter_names(const Robot&) const override { return parameters_; }
+  std::string missing_inputs(const PoseTable&) const override { return {}; }
+  std::string inputs() const override { return inputs_; }
+
+ protected:
+  EffectSlot slot(const Robot&, int k) const override { return {EffectSlot::User, k}; }
+  UserJointError<double> user_function() const override { return function_; }
+  UserJointError<EffectDual> user_function_dual() const override { return function_dual_; }
+
+ private:
+  std::string name_, description_;
+  std::vector<std::string> parameters_;
+  UserJointError<double> function_;
+  UserJointError<EffectDual> function_dual_;
+  std::string inputs_;
 };
 
 // The registered effects, the five GUIDE candidates first (scale, backlash,

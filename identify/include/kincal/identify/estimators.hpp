@@ -14,7 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <map>
 #include <optional>
 #include <string>

@@ -83,6 +83,9 @@ struct Robot {
   const char* target_body() const;
   // How the family's base error model reads in messages.
   const char* error_model() const;
+  // The fewest nodes a deleted-node screen of the family's own fit leaves
+  // (identify/outliers.hpp).
+  Eigen::Index outlier_min_nodes() const;
 
   // The pose the machine starts from (stewart: `home`; hybrid: the reference
   // pose, the origin of the workpiece frame with the tool aligned to it).

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "estimate/least_squares_step.hpp"
 #include "families/hybrid/hybrid_family.hpp"
@@ -31,7 +32,7 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   HybridCalibrationOptions opt;
   // Seed 000's single fine step by the fit's estimator: the fit finishes it
   // by its own (damped) Gauss–Newton steps, from the coarse machine instead
-  // where the step lands farther (start_from_the_better). The fine stage's
+  // where the step lands farther (start). The fine stage's
   // re-linearisation would reach about the same point at ~0.5 G
   // instructions per construction (a diagnosis constructs several).
   opt.estimator = fine_;
@@ -64,8 +65,10 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   twist_reference_ = hybrid_error_reference(comp_.nominal, HybridErrorModelOptions().up_split);
 }
 
-bool HybridBaseFit::start_from_the_best(const PoseTable& data, const std::vector<HybridCompensation>& candidates) {
-  std::vector<HybridCompensation> states = candidates;
+void HybridBaseFit::start(const PoseTable& data, bool own_estimate, bool current) {
+  std::vector<HybridCompensation> states;
+  if (own_estimate) states.push_back(seed_estimate_);
+  if (current) states.push_back(comp_);
   comp_ = seed_estimate_;
   step(reference_ - values());
   states.push_back(comp_);  // the coarse machine
@@ -82,7 +85,6 @@ bool HybridBaseFit::start_from_the_best(const PoseTable& data, const std::vector
     }
   }
   comp_ = states[best];
-  return best + 1 == states.size();
 }
 
 void HybridBaseFit::recentre(const PoseTable& data) {
@@ -214,6 +216,12 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
 
 }  // namespace detail
 
+std::unique_ptr<detail::SteppedBaseFit> HybridFamily::stepped_base_fit(
+    const Robot& robot, const PoseTable& start, const std::vector<std::optional<EffectNode>>& nodes,
+    EstimatorKind estimator, double ridge_k) const {
+  return std::make_unique<detail::HybridBaseFit>(robot, start, nodes, estimator, true, ridge_k);
+}
+
 detail::BaseModel HybridFamily::fit_base(const Robot& robot, const PoseTable& data,
                                          const std::vector<std::optional<EffectNode>>& en,
                                          std::optional<EstimatorKind> estimator, bool finish, double ridge_k) const {
@@ -223,19 +231,19 @@ detail::BaseModel HybridFamily::fit_base(const Robot& robot, const PoseTable& da
   const double penalty = fit.penalty();
   BaseModel base;
   const bool iterate = finish || estimator == EstimatorKind::Ridge;
-  if (iterate) fit.start_from_the_better(data);
+  if (iterate) fit.start(data, false, true);
   // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
   // lower the objective (damped_gauss_newton): 6 plain steps were enough
   // wherever seed 000's step started near the minimum; from the coarse
   // machine the damped steps need more.
-  HybridCompensation accepted = fit.state();
+  fit.keep();
   const DescentCount count = damped_gauss_newton(
       iterate ? 40 : 0,
       [&] {
         base = fit.evaluate(data, false);
         return Evaluation{fit.objective(base), base.nodes.size()};
       },
-      [&] { accepted = fit.state(); }, [&] { fit.restore(accepted); },
+      [&] { fit.keep(); }, [&] { fit.go_back(); },
       [&](MatrixXd& H, VectorXd& y) {
         Index rows = 0;
         for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();

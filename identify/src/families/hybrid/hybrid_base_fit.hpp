@@ -23,40 +23,36 @@ namespace kincal::identify::detail {
 // stepped on seed 000's identifiable columns. fit_base finishes it by
 // Gauss–Newton alone; the joint fit of base and effects
 // (effect_calibration.cpp) steps it together with the effect parameters.
-class HybridBaseFit {
+class HybridBaseFit final : public SteppedBaseFit {
  public:
   HybridBaseFit(const Robot& robot, const PoseTable& start, const std::vector<std::optional<EffectNode>>& nodes,
                 std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k);
-  Eigen::Index parameters() const { return p_; }
-  double penalty() const { return penalty_; }  // k of ridge, else 0
-  void set_penalty(double k) { penalty_ = k; }
-  Eigen::VectorXd values() const;              // χ on the identifiable columns
-  Eigen::VectorXd away() const { return values() - reference_; }  // χ − χ_coarse
-  void step(const Eigen::VectorXd& delta);     // χ += delta
-  HybridCompensation state() const { return comp_; }
-  void restore(const HybridCompensation& s) { comp_ = s; }
+  Eigen::Index parameters() const override { return p_; }
+  double penalty() const override { return penalty_; }  // k of ridge, else 0
+  void set_penalty(double k) override { penalty_ = k; }
+  const char* centre() const override { return "seed 000's coarse machine"; }
+  Eigen::VectorXd values() const;  // χ on the identifiable columns
+  Eigen::VectorXd away() const override { return values() - reference_; }  // χ − χ_coarse
+  // The ridge's centre χ_coarse := seed 000's coarse stage run on `data`.
+  void recentre(const PoseTable& data) override;
+  void step(const Eigen::VectorXd& delta) override;  // χ += delta
+  void keep() override { kept_ = comp_; }
+  void go_back() override { comp_ = kept_; }
   // Seed 000's fine stage is one linear step from the coarse machine. Where
   // an unmodelled effect is almost in the span of the base's ill-conditioned
   // combinations, that step can land millimetres away where the first-order
   // model no longer holds (UPS-actuator scale s = ±5e-4: an encoder offset
   // moved 30 mm, every gauge target 5 mm off). Then the fit starts from the
-  // coarse machine itself: of the two, the one that models more nodes of
-  // `data`, then the lower objective. Returns true when it chose the coarse
-  // machine.
-  bool start_from_the_better(const PoseTable& data) { return start_from_the_best(data, {state()}); }
-  // The same choice among `candidates` and the coarse machine (ties: the
-  // earlier candidate).
-  bool start_from_the_best(const PoseTable& data, const std::vector<HybridCompensation>& candidates);
-  // The ridge's centre χ_coarse := seed 000's coarse stage run on `data`.
-  void recentre(const PoseTable& data);
-  // Seed 000's coarse + fine estimate this fit was constructed from.
-  const HybridCompensation& seed_estimate() const { return seed_estimate_; }
+  // coarse machine itself (the fallback start): of the candidates, the one
+  // that models more nodes of `data`, then the lower objective (ties: seed
+  // 000's estimate, then the current iterate, then the coarse machine).
+  void start(const PoseTable& data, bool own_estimate, bool current) override;
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
-  BaseModel evaluate(const PoseTable& data, bool with_joint_map) const;
+  BaseModel evaluate(const PoseTable& data, bool with_joint_map) const override;
   // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².
-  double objective(const BaseModel& base) const;
+  double objective(const BaseModel& base) const override;
   // Description, model (the current χ), ridge_k and column_away of `base`.
-  void finish(BaseModel& base, const std::string& data_file, int steps) const;
+  void finish(BaseModel& base, const std::string& data_file, int steps) const override;
 
  private:
   const Robot* robot_;
@@ -65,7 +61,7 @@ class HybridBaseFit {
   bool ridge_, finish_;
   EstimatorKind fine_ = EstimatorKind::Ols;
   HybridCalibration cal_;
-  HybridCompensation comp_, seed_estimate_;
+  HybridCompensation comp_, seed_estimate_, kept_;
   Eigen::Index p_ = 0;
   double penalty_ = 0;
   Eigen::VectorXd reference_;

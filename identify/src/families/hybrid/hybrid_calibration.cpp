@@ -7,7 +7,7 @@
 
 #include "kincal/identify/outliers.hpp"
 
-#include <Eigen/QR>
+#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -487,7 +487,7 @@ HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable&
     return out;
   }
   SequentialOutlierOptions so;
-  so.min_nodes = 7;
+  so.min_nodes = nominal.outlier_min_nodes();
   HybridCalibrationOptions o = options;
   o.test_nodes = true;
   ScreenedFit<HybridCalibration> s = screen_and_refit(

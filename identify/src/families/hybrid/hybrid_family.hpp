@@ -40,6 +40,13 @@ class HybridFamily final : public Family {
                              std::optional<EstimatorKind> estimator, bool finish_least_squares,
                              double ridge_k) const override;  // hybrid_base_fit.cpp
   const char* error_model() const override { return "seed 000 source-error model"; }
+  const char* base_fit() const override { return "seed 000's coarse + fine stages"; }
+  Eigen::Index outlier_min_nodes() const override { return 7; }
+  bool steps_base_with_effects() const override { return true; }
+  std::unique_ptr<detail::SteppedBaseFit> stepped_base_fit(const Robot& robot, const PoseTable& start,
+                                                           const std::vector<std::optional<EffectNode>>& nodes,
+                                                           EstimatorKind estimator,
+                                                           double ridge_k) const override;  // hybrid_base_fit.cpp
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
 

@@ -258,7 +258,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
 StewartOutlierSearch stewart_outlier_search(const Robot& nominal, const PoseTable& data,
                                             const StewartCalibration& all, const StewartCalibrationOptions& options) {
   SequentialOutlierOptions so;
-  so.min_nodes = 8;
+  so.min_nodes = nominal.outlier_min_nodes();
   ScreenedFit<StewartCalibration> s = screen_and_refit(
       data, all, [](const StewartCalibration& c) -> const LinearProblem& { return c.final_problem; },
       [](const StewartCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },

@@ -34,6 +34,8 @@ class StewartFamily final : public Family {
                              std::optional<EstimatorKind> estimator, bool finish_least_squares,
                              double ridge_k) const override;  // stewart_base_fit.cpp
   const char* error_model() const override { return "seed 001 42-parameter model"; }
+  const char* base_fit() const override { return "seed 001's iterated least squares"; }
+  Eigen::Index outlier_min_nodes() const override { return 8; }
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
 
