@@ -3,10 +3,13 @@
 // family").
 #include "families/family.hpp"
 
-#include "families/hybrid/hybrid_family.hpp"
-#include "families/stewart/stewart_family.hpp"
+#include <stdexcept>
+#include <string>
+
 #include "effects/base_fit.hpp"
 #include "families/family_errors.hpp"
+#include "families/hybrid/hybrid_family.hpp"
+#include "families/stewart/stewart_family.hpp"
 #include "kincal/identify/joint_limits.hpp"
 
 namespace kincal::identify {
@@ -30,8 +33,11 @@ std::unique_ptr<detail::SteppedBaseFit> Family::stepped_base_fit(const Robot&, c
 const Family& family_of(const Robot& robot) {
   for (const Family* f : kFamilies)
     if (f->describes(robot)) return *f;
-  // Robot's variant holds one of the registered families' geometries.
-  return *kFamilies[0];
+  // Robot's variant holds one of the registered families' geometries; a
+  // geometry added to the variant without its family here is a programming
+  // error, said rather than answered by another family.
+  throw std::logic_error("no registered family describes robot '" + robot.name +
+                         "' (identify/src/families/families.cpp: add its family to kFamilies)");
 }
 
 const Family* family_named(const std::string& name) {

@@ -185,7 +185,8 @@ class Family {
   virtual std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const = 0;
 };
 
-// The family of a robot (every Robot has one).
+// The family of a robot (every Robot has one; std::logic_error if its
+// geometry has no registered family).
 const Family& family_of(const Robot& robot);
 // The family a description's `family` value names, or nullptr.
 const Family* family_named(const std::string& name);
