@@ -5,13 +5,13 @@
 // Monte Carlo checks are seeded.
 #include <gtest/gtest.h>
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <string>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "random_design.hpp"

@@ -6,7 +6,6 @@
 // the identifiable set for two pure-translation layers (seed 000 Section 4.1).
 #include <gtest/gtest.h>
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,6 +16,7 @@
 #include <vector>
 
 #include "kincal/core/reference_machines.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/simulate.hpp"

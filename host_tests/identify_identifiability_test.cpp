@@ -4,7 +4,6 @@
 // with planted dependencies.
 #include <gtest/gtest.h>
 
-#include "kincal/identify/decompositions.hpp"
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -13,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "random_design.hpp"

@@ -6,13 +6,13 @@
 // hexapod, random candidate poses drawn here, unreachable candidates).
 #include <gtest/gtest.h>
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <numeric>
 #include <cmath>
 #include <random>
 #include <set>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/plan.hpp"
 #include "kincal/identify/robot.hpp"

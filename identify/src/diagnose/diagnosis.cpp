@@ -13,7 +13,6 @@
 #include "kincal/identify/diagnosis.hpp"
 #include "kincal/identify/target_calibration.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -29,6 +28,7 @@
 #include "effects/base_fit.hpp"
 #include "families/family.hpp"
 #include "estimate/least_squares_step.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"

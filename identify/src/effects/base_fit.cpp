@@ -1,10 +1,10 @@
 #include "effects/base_fit.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <limits>
 
 #include "families/family.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"

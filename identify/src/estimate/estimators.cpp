@@ -2,7 +2,6 @@
 // and docs/estimators.md.
 #include "kincal/identify/estimators.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 

@@ -2,7 +2,6 @@
 // indices, collinearity report. See identifiability.hpp and docs/estimators.md.
 #include "kincal/identify/identifiability.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {

@@ -1,7 +1,8 @@
 #include "estimate/least_squares_step.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <cmath>
+
+#include "kincal/identify/decompositions.hpp"
 
 namespace kincal::identify::detail {
 

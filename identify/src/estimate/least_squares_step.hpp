@@ -4,9 +4,10 @@
 #pragma once
 
 #include <Eigen/Core>
-#include "kincal/identify/decompositions.hpp"
 #include <cstddef>
 #include <limits>
+
+#include "kincal/identify/decompositions.hpp"
 
 namespace kincal::identify::detail {
 

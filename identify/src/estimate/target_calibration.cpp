@@ -1,12 +1,12 @@
 #include "kincal/identify/target_calibration.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <string>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"

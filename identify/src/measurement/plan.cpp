@@ -3,7 +3,6 @@
 // order, and the same numbers for a grid and a random design of the same size.
 #include "kincal/identify/plan.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -17,6 +16,7 @@
 
 #include "families/family.hpp"
 #include "families/family_errors.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"

@@ -14,12 +14,12 @@
 #pragma once
 
 #include <Eigen/Core>
-#include "kincal/identify/decompositions.hpp"
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/rank_tolerance.hpp"
 
 namespace kincal::identify {

@@ -7,7 +7,6 @@
 
 #include "kincal/identify/outliers.hpp"
 
-#include "kincal/identify/decompositions.hpp"
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -17,6 +16,7 @@
 #include <string>
 
 #include "kincal/core/compensation.hpp"
+#include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
