@@ -14,6 +14,7 @@
 // registration and targets).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <random>
@@ -459,9 +460,17 @@ namespace {
 // poses are compensated by the model's HybridCompensation (seed 000 Eq. (16):
 // the controller's first-order error twist, not the exact model the fit used)
 // and driven on the true machine; targets compared in the tracker's frame.
+//
+// Without targets (`nominal_targets` empty) the instrument measures the full
+// tool pose in the robot's base frame (a 6-DOF probe; the hybrid's own
+// pipeline reads only seed 000's gauge): noise is a random small rotation
+// and translation applied to the reached pose (simulate adds it to the
+// x..rz numbers instead), and the held-out poses are judged by the tool
+// point's position and the tool's orientation.
 struct HybridTrackerRun {
   TargetCalibration calibration;
   double compensated_rms_um = 0;
+  double compensated_orientation_rms_urad = 0;  // full poses
   double held_out_prediction_rms_um = 0;
   std::optional<Diagnosis> diagnosis;  // with a hidden backlash
   Vec6<double> backlash = Vec6<double>::Zero();
@@ -476,50 +485,67 @@ HybridTrackerRun run_hybrid_case(const std::vector<Vec3<double>>& nominal_target
                                  const Vec6<double>& backlash = Vec6<double>::Zero()) {
   Robot nominal = builtin_robot("hybrid-seed000");
   nominal.targets = nominal_targets;
+  const bool full_pose = nominal_targets.empty();
   const HybridGeometry<double>& g = nominal.hybrid();
   const HybridErrorModel model(g);
-  std::mt19937_64 rng(seed);
+  // Three streams, so that the machine's errors do not change the poses or
+  // the noise: the floor run (error_scale 0.01) measures the same poses with
+  // the same noise draws as the big one; a pose the true machine cannot
+  // reach is left out, not redrawn.
+  std::mt19937_64 rng(seed), pose_rng(seed + 1000), noise_rng(seed + 2000);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Eigen::VectorXd truth(HybridErrorModel::kParameterCount);
   for (Eigen::Index j = 0; j < truth.size(); ++j)
     truth(j) = error_scale * (model.parameters()[std::size_t(j)].angular() ? 3e-4 : 0.3) * u(rng);
   const Pose<double> registration = Pose<double>::from_xyz_rpy(-1200, 2500, 400, 0.03, -0.06, 2.6);
   std::normal_distribution<double> noise(0.0, 0.005);
+  std::normal_distribution<double> angle_noise(0.0, 5e-6);
   PoseTable data;
   data.file = "hybrid-tracker.csv";
-  data.has_role = data.has_targets = true;
+  data.has_role = true;
+  data.has_targets = !full_pose;
+  data.has_measured = full_pose;
   data.target_count = int(true_targets.size());
-  data.in_instrument_frame = true;
+  data.in_instrument_frame = !full_pose;
   data.has_dir = backlash != Vec6<double>::Zero();
   std::vector<Pose<double>> held_out;
   std::vector<Vec6<double>> held_out_dir;
   for (int k = 0; k < 120; ++k) {
     PoseRow row;
     Pose<double> commanded, reached;
+    Vec6<double> q;
+    HybridPassive<double> passive;
     for (int attempt = 0;; ++attempt) {
       if (attempt == 200) {
         ADD_FAILURE() << "no reachable pose";
         return {};
       }
-      commanded = Pose<double>::from_xyz_rpy(250 * u(rng), 250 * u(rng), -60 + 40 * u(rng), 0.3 * u(rng), 0.3 * u(rng),
-                                             0.5 * u(rng));
-      Vec6<double> q;
-      HybridPassive<double> passive = g.home;
-      if (hybrid_ik(g, commanded, q, nullptr, &passive) != Status::Ok) continue;
-      row.dir = Eigen::VectorXi(6);
-      for (int i = 0; i < 6; ++i) (*row.dir)(i) = rng() % 2 == 0 ? -1 : 1;
-      const Vec6<double> driven = q + backlash.cwiseProduct(row.dir->cast<double>());
-      if (model.actual_fk(truth, driven, passive, reached).status == Status::Ok) break;
+      commanded = Pose<double>::from_xyz_rpy(250 * u(pose_rng), 250 * u(pose_rng), -60 + 40 * u(pose_rng),
+                                             0.3 * u(pose_rng), 0.3 * u(pose_rng), 0.5 * u(pose_rng));
+      passive = g.home;
+      if (hybrid_ik(g, commanded, q, nullptr, &passive) == Status::Ok) break;
     }
+    row.dir = Eigen::VectorXi(6);
+    for (int i = 0; i < 6; ++i) (*row.dir)(i) = pose_rng() % 2 == 0 ? -1 : 1;
+    Twist<double> e;  // drawn for every pose, used or not
+    e << noise(noise_rng), noise(noise_rng), noise(noise_rng), angle_noise(noise_rng), angle_noise(noise_rng),
+        angle_noise(noise_rng);
+    Eigen::Matrix<double, 3, 3> target_noise;
+    for (Eigen::Index j = 0; j < 9; ++j) target_noise.data()[j] = noise(noise_rng);
+    const Vec6<double> driven = q + backlash.cwiseProduct(row.dir->cast<double>());
+    if (model.actual_fk(truth, driven, passive, reached).status != Status::Ok) continue;
     row.id = "H" + std::to_string(k);
     row.line = std::size_t(k) + 2;
     row.role = k < 80 ? Role::Cal : Role::Test;
     row.commanded = commanded.to_xyz_rpy();
-    Eigen::Matrix<double, 3, 3> t = Eigen::Matrix<double, 3, 3>::Zero();
-    for (std::size_t j = 0; j < true_targets.size(); ++j)
-      t.col(Eigen::Index(j)) =
-          (registration * reached).transform(true_targets[j]) + Vec3<double>(noise(rng), noise(rng), noise(rng));
-    row.targets = t;
+    if (full_pose) {
+      row.measured = apply_twist(reached, e).to_xyz_rpy();
+    } else {
+      Eigen::Matrix<double, 3, 3> t = Eigen::Matrix<double, 3, 3>::Zero();
+      for (std::size_t j = 0; j < true_targets.size(); ++j)
+        t.col(Eigen::Index(j)) = (registration * reached).transform(true_targets[j]) + target_noise.col(Eigen::Index(j));
+      row.targets = t;
+    }
     if (row.role == Role::Test) {
       held_out.push_back(commanded);
       held_out_dir.push_back(row.dir->cast<double>());
@@ -539,10 +565,10 @@ HybridTrackerRun run_hybrid_case(const std::vector<Vec3<double>>& nominal_target
     out.diagnosis = diagnose(nominal, data);
     fitted = calibrate_with_effects(nominal, data, {"backlash"});
     out.backlash = fitted.effects.values.at("backlash");
-    instrument_of(fitted, fitted_registration, fitted_targets);
+    if (!full_pose) instrument_of(fitted, fitted_registration, fitted_targets);
   }
   const HybridCompensation compensation = hybrid_compensation_from_model(fitted);
-  double sum = 0;
+  double sum = 0, sum_rotation = 0;
   int count = 0;
   for (std::size_t h = 0; h < held_out.size(); ++h) {
     const Pose<double>& desired = held_out[h];
@@ -557,6 +583,12 @@ HybridTrackerRun run_hybrid_case(const std::vector<Vec3<double>>& nominal_target
     const Vec6<double> command = q - out.backlash.cwiseProduct(held_out_dir[h]);
     EXPECT_EQ(model.actual_fk(truth, Vec6<double>(command + backlash.cwiseProduct(held_out_dir[h])), passive, reached).status,
               Status::Ok);
+    if (full_pose) {
+      const Twist<double> e = pose_error(reached, desired);
+      sum += e.head<3>().squaredNorm();
+      sum_rotation += e.tail<3>().squaredNorm();
+      ++count;
+    }
     for (std::size_t j = 0; j < true_targets.size(); ++j) {
       const Vec3<double> want = (fitted_registration * desired).transform(fitted_targets[j]);
       const Vec3<double> got = (registration * reached).transform(true_targets[j]);
@@ -565,6 +597,7 @@ HybridTrackerRun run_hybrid_case(const std::vector<Vec3<double>>& nominal_target
     }
   }
   out.compensated_rms_um = 1e3 * std::sqrt(sum / count);
+  out.compensated_orientation_rms_urad = 1e6 * std::sqrt(sum_rotation / count);
   return out;
 }
 
@@ -588,6 +621,69 @@ TEST_P(HybridTracker, CompensatesHeldOutTargetsWithinOneAndAHalfTimesTheNoiseFlo
 }
 
 INSTANTIATE_TEST_SUITE_P(ThreeAndOneTargets, HybridTracker, ::testing::Range(0, 2));
+
+// The two tests above and below hold one machine each; this one draws eight
+// more (seeds 1..8: other source errors, poses, target nests and noise) for
+// each instrument, so that no bar rests on one lucky draw. Before the target
+// fit's column-selection tolerance (hybrid_errors.cpp kSelectionTolerance)
+// 6 of 12 such machines measured by full poses, and 1 of 12 by one target,
+// were over 1.5x their floor (worst 2.93x).
+TEST(HybridAcrossMachines, FullPoseAndOneAndThreeTargetsStayWithinOneAndAHalfTimesTheFloor) {
+  const std::vector<Vec3<double>> three{{60, 0, -40}, {-30, 52, -40}, {-30, -52, -40}};
+  const std::vector<Vec3<double>> one{{40, 20, -50}};
+  for (const auto& [label, nominal_targets] :
+       {std::pair{"full pose", std::vector<Vec3<double>>{}}, std::pair{"three targets", three},
+        std::pair{"one target", one}}) {
+    std::vector<double> ratios;
+    for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+      const HybridTrackerRun big =
+          run_hybrid_case(nominal_targets, moved_targets(nominal_targets, 700 + seed, 0.3), 1.0, seed);
+      const HybridTrackerRun floor =
+          run_hybrid_case(nominal_targets, moved_targets(nominal_targets, 700 + seed, 0.003), 0.01, seed);
+      ratios.push_back(big.compensated_rms_um / floor.compensated_rms_um);
+      EXPECT_LE(big.compensated_rms_um, 1.5 * floor.compensated_rms_um)
+          << label << ", seed " << seed << ": " << big.compensated_rms_um << " um (floor " << floor.compensated_rms_um
+          << ")";
+      if (nominal_targets.empty()) {
+        EXPECT_LE(big.compensated_orientation_rms_urad, 1.5 * floor.compensated_orientation_rms_urad)
+            << label << ", seed " << seed;
+      }
+    }
+    std::sort(ratios.begin(), ratios.end());
+    std::cout << "hybrid, " << label << ", 8 machines: compensated / floor from " << ratios.front() << " to "
+              << ratios.back() << "\n";
+  }
+}
+
+// The hybrid from full poses (issue #12 item 2: the full pose is one of the
+// measurement models either family reads): no targets, no registration, the
+// same 0.3 mm / 0.3 mrad machine and 5 µm / 5 µrad noise.
+TEST(HybridFullPose, CompensatesHeldOutPosesWithinOneAndAHalfTimesTheNoiseFloor) {
+  const HybridTrackerRun big = run_hybrid_case({}, {}, 1.0, 37);
+  const HybridTrackerRun floor = run_hybrid_case({}, {}, 0.01, 37);
+  const TargetCalibration& c = big.calibration;
+  std::cout << "hybrid, full poses: " << c.free_parameters << " free, condition " << c.condition_number
+            << ", compensated " << big.compensated_rms_um << " um / " << big.compensated_orientation_rms_urad
+            << " urad (floor " << floor.compensated_rms_um << " / " << floor.compensated_orientation_rms_urad
+            << "), held-out prediction " << big.held_out_prediction_rms_um << " um (floor "
+            << floor.held_out_prediction_rms_um << ")\n";
+  EXPECT_TRUE(c.full_pose);
+  EXPECT_TRUE(c.targets.empty());
+  EXPECT_EQ(c.rank, c.free_parameters);
+  // Far fewer of the 150 than all (errors along a joint's own axis, and
+  // combinations no pose separates, stay held), among them the six encoder
+  // offsets; the kept columns well apart (hybrid_errors.cpp
+  // kSelectionTolerance: 5e6 at rounding's tolerance).
+  EXPECT_GT(c.free_parameters, 6);
+  EXPECT_LT(c.free_parameters, 100);
+  EXPECT_LT(c.condition_number, 1e5);
+  EXPECT_LE(big.compensated_rms_um, 1.5 * floor.compensated_rms_um);
+  EXPECT_LE(big.compensated_orientation_rms_urad, 1.5 * floor.compensated_orientation_rms_urad);
+  EXPECT_LE(big.held_out_prediction_rms_um, 1.5 * floor.held_out_prediction_rms_um);
+  // Without the fit the same machine is hundreds of µm off: the floor is
+  // reached by identification, not by an error too small to matter.
+  EXPECT_GT(1e3 * c.history.front().rms_position_mm, 20 * big.held_out_prediction_rms_um);
+}
 
 }  // namespace
 
@@ -620,5 +716,24 @@ TEST_P(HybridTrackerEffect, HiddenBacklashIsNamedFittedAndCompensated) {
 }
 
 INSTANTIATE_TEST_SUITE_P(ThreeAndOneTargets, HybridTrackerEffect, ::testing::Range(0, 2));
+
+TEST(HybridFullPose, HiddenBacklashIsNamedFittedAndCompensated) {
+  Vec6<double> backlash;
+  backlash << 0.02, -0.015, 0, 0, 0, 0;
+  const HybridTrackerRun big = run_hybrid_case({}, {}, 1.0, 43, backlash);
+  const HybridTrackerRun floor = run_hybrid_case({}, {}, 0.01, 43, backlash / 100);
+  ASSERT_TRUE(big.diagnosis);
+  std::cout << "hybrid, full poses, hidden backlash: diagnosis " << big.diagnosis->verdict << " (accepted "
+            << (big.diagnosis->accepted.empty() ? std::string("none") : big.diagnosis->accepted.front()) << "), b1 "
+            << big.backlash(0) << " b2 " << big.backlash(1) << " mm, compensated " << big.compensated_rms_um
+            << " um / " << big.compensated_orientation_rms_urad << " urad (floor " << floor.compensated_rms_um << " / "
+            << floor.compensated_orientation_rms_urad << ")\n";
+  ASSERT_FALSE(big.diagnosis->accepted.empty());
+  EXPECT_EQ(big.diagnosis->accepted.front(), "backlash");
+  EXPECT_NEAR(big.backlash(0), 0.02, 0.003);
+  EXPECT_NEAR(big.backlash(1), -0.015, 0.003);
+  EXPECT_LE(big.compensated_rms_um, 1.5 * floor.compensated_rms_um);
+  EXPECT_LE(big.compensated_orientation_rms_urad, 1.5 * floor.compensated_orientation_rms_urad);
+}
 
 }  // namespace

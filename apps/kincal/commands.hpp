@@ -51,6 +51,7 @@ struct SimulateArgs {
   std::vector<std::string> effects;
   double noise_mm = 0, noise_rad = 0;
   std::uint64_t seed = 1;
+  bool pose_only = false;
 };
 int run_simulate(const SimulateArgs& args);
 

@@ -30,6 +30,7 @@
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -300,28 +301,35 @@ int run_identify_hybrid_gauge(const IdentifyArgs& a, const ki::Robot& robot, con
 // Laser-tracker targets, either family (target_calibration.hpp): the
 // family's errors with the targets' positions and, in the instrument's
 // frame, its registration; the frame convention closes what target
-// positions cannot fix.
+// positions cannot fix. The same fit reads the full poses of a family whose
+// own pipeline does not (the hybrid's is seed 000's gauge).
 int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki::PoseTable& data) {
+  const bool poses = ki::reads_full_poses(data);
+  const std::string measured = poses ? "full poses" : "target measurements";
   if (!a.estimator.empty() && a.estimator != "ols")
-    throw ki::InputError("--estimator " + a.estimator + ": target measurements are identified by ols so far");
+    throw ki::InputError("--estimator " + a.estimator + ": " + measured + " of the " + robot.family() +
+                         " family are identified by ols so far");
   const ki::TargetCalibrationOptions options;
-  std::cout << "identify: " << a.data << ", robot " << robot.name << " ("
-            << robot.error_model() << " from "
-            << data.target_columns() << " target(s) measured in the "
-            << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (" << robot.error_model() << " from ";
+  if (poses)
+    std::cout << "full poses in the robot's base frame, rotations weighted at " << ki::kOrientationWeightMm << " mm)\n";
+  else
+    std::cout << data.target_columns() << " target(s) measured in the "
+              << (a.instrument_frame ? "instrument's frame; registration identified" : "robot's base frame") << ")\n";
   const ki::TargetCalibration c = ki::calibrate_targets(robot, data, options);
   const int family_size = int(c.names.size());
   const int held = family_size + 3 * int(c.targets.size()) + (a.instrument_frame ? 6 : 0) - c.free_parameters;
   std::cout << "  cal nodes " << c.nodes << ", " << c.free_parameters << " free parameters (" << family_size
             << " errors, " << 3 * c.targets.size() << " target coordinates"
-            << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " fixed by the frame convention: "
-            << c.convention << "), rank " << c.rank << ", condition number (column-scaled) " << c.condition_number
-            << "\n";
+            << (a.instrument_frame ? ", 6 registration" : "") << ", less " << held << " fixed by the "
+            << (poses ? "convention" : "frame convention") << ": " << c.convention << "), rank " << c.rank
+            << ", condition number (column-scaled) " << c.condition_number << "\n";
   const auto held_errors = std::count(c.fitted.begin(), c.fitted.end(), false);
   if (held_errors > 0)
     std::cout << "  " << held_errors << " of the " << family_size
               << " errors held at 0 by the convention (MODEL.json: identifiable false; SUMMARY.json: dropped)\n";
-  std::cout << "  iteration   rms target residual (um)\n";
+  std::cout << (poses ? "  iteration   rms residual (um; rotations at the weight)\n"
+                      : "  iteration   rms target residual (um)\n");
   for (const ki::TargetIteration& h : c.history) {
     char line[96];
     std::snprintf(line, sizeof line, "  %9d %26.4f\n", h.iteration, 1e3 * h.rms_position_mm);
@@ -362,7 +370,8 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
   if (!a.json.empty()) {
     nlohmann::json& j = summary;
     j["estimator"] = "ols";
-    j["measurement"] = {{"targets", data.target_columns()}, {"instrument_frame", a.instrument_frame}};
+    j["measurement"] = poses ? nlohmann::json{{"full_pose", true}, {"orientation_weight_mm", ki::kOrientationWeightMm}}
+                             : nlohmann::json{{"targets", data.target_columns()}, {"instrument_frame", a.instrument_frame}};
     j["rank"] = used.rank;
     j["parameters"] = used.free_parameters;
     // The family's errors the convention holds at 0 (the hybrid's column

@@ -49,6 +49,9 @@ int run(int argc, char** argv) {
   simulate->add_option("--instrument-frame", sim.instrument_frame,
                        "with --targets: the robot base frame's pose in the instrument's frame, 'x,y,z,rx,ry,rz' (mm, "
                        "rad); the targets are written in the instrument frame");
+  simulate->add_flag("--pose-only", sim.pose_only,
+                     "write the measured poses alone (mx..mrz), without the hybrid's gauge targets: a 6-DOF instrument "
+                     "(identify and diagnose then read the poses)");
   simulate->add_option("--noise-mm", sim.noise_mm, "sigma of Gaussian noise on positions, mm (default 0)")
       ->check(kincal_app::decimal(0, HUGE_VAL));
   simulate->add_option("--noise-rad", sim.noise_rad, "sigma of Gaussian noise on angles, rad (default 0)")

@@ -50,6 +50,7 @@ int run_simulate(const SimulateArgs& a) {
     if (v.size() != 6) throw ki::InputError("--instrument-frame: give x,y,z,rx,ry,rz (mm, rad)");
     sopt.instrument_frame = kincal::Pose<double>::from_xyz_rpy(Eigen::Map<const kincal::Vec6<double>>(v.data()));
   }
+  sopt.pose_only = a.pose_only;
   sopt.noise_mm = a.noise_mm;
   sopt.noise_rad = a.noise_rad;
   sopt.seed = a.seed;

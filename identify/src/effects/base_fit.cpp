@@ -21,14 +21,14 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// Laser-tracker targets (target_calibration.hpp), either family: per node the
-// target residuals, their map M and the design rows in the convention's
-// coordinates.
+// Laser-tracker targets (target_calibration.hpp), either family, or the full
+// poses of a family whose own fit does not read them: per node the residuals,
+// their map M and the design rows in the convention's coordinates.
 BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
   const TargetCalibration cal = calibrate_targets(robot, data);
   BaseModel base;
-  base.description = std::string(robot.error_model()) +
-                     " from " + std::to_string(data.target_columns()) + " target(s)" +
+  base.description = std::string(robot.error_model()) + " from " +
+                     (cal.full_pose ? std::string("full poses") : std::to_string(data.target_columns()) + " target(s)") +
                      (data.in_instrument_frame ? " in the instrument's frame (registration identified)" : "") +
                      " (Gauss-Newton, " + std::to_string(cal.history.size()) + " evaluations)";
   base.parameters = cal.free_parameters;
@@ -36,9 +36,14 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
   std::vector<TargetRowInput> inputs;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
     const PoseRow& row = data.rows[k];
-    if (!row.targets || !usable_row(row) || !en[k]) continue;
+    if (!(cal.full_pose ? bool(row.measured) : bool(row.targets)) || !usable_row(row) || !en[k]) continue;
     at.push_back(k);
-    inputs.push_back({joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), *row.targets});
+    TargetRowInput input{joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), {}, {}};
+    if (cal.full_pose)
+      input.measured_pose = Pose<double>::from_xyz_rpy(*row.measured);
+    else
+      input.measured = *row.targets;
+    inputs.push_back(input);
   }
   std::vector<std::optional<TargetRowModel>> models = target_rows(robot, cal, inputs);
   for (std::size_t i = 0; i < at.size(); ++i) {
@@ -46,6 +51,7 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
     NodeData n;
     n.row = at[i];
     n.test = data.rows[at[i]].role == Role::Test;
+    n.pose_rows = models[i]->pose_rows;
     n.r = std::move(models[i]->residual);
     n.M = std::move(models[i]->M);
     n.H = std::move(models[i]->H);

@@ -14,20 +14,20 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/model.hpp"
 #include "kincal/identify/robot.hpp"
 
 namespace kincal::identify::detail {
 
-// A 6-UPS measures orientation too; a rotation counts as the displacement it
-// causes 200 mm from its axis (as in stewart_calibration.cpp), so every
-// residual coordinate is in mm and one noise level applies to all.
-constexpr double kOrientationWeightMm = 200.0;
+// A full pose measures orientation too: its rotation rows are weighted by
+// kOrientationWeightMm (measurement_model.hpp).
+using identify::kOrientationWeightMm;
 
 struct NodeData {
   std::size_t row = 0;
   bool test = false;
-  // A 6-UPS's measured pose: rows 3–5 are orientations (in mm at
+  // A measured full pose: rows 3–5 are orientations (in mm at
   // kOrientationWeightMm). false: every row is a position (gauge, targets).
   bool pose_rows = false;
   Eigen::VectorXd r;  // base-model residual in measurement space, mm

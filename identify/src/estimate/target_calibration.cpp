@@ -45,11 +45,38 @@ struct TargetNode {
   std::size_t line;
   std::string id;
   Vec6<double> q;
-  TargetPoints measured;
+  TargetPoints measured;        // targets
+  Pose<double> measured_pose;   // full poses
   NodeGuess guess;  // guess.pose: the model's pose at q, last found
 };
 
+// What a node measures: the targets (3 rows each) or the full pose (6 rows,
+// rotations weighted: measurement_model.hpp's kOrientationWeightMm).
+struct Reading {
+  bool pose = false;
+  int targets = 0;
+  Eigen::Index rows() const { return pose ? 6 : 3 * targets; }
+};
+
+Reading reading_of(const PoseTable& data) {
+  return reads_full_poses(data) ? Reading{true, 0} : Reading{false, data.target_columns()};
+}
+
+const Vec6<double>& pose_weights() {
+  static const Vec6<double> w =
+      (Vec6<double>() << 1, 1, 1, kOrientationWeightMm, kOrientationWeightMm, kOrientationWeightMm).finished();
+  return w;
+}
+
+// measured − model: the targets' positions, or the weighted pose error twist.
+Eigen::VectorXd node_residual(const Reading& reading, const TargetNode& node, const Pose<double>& registration,
+                              const Pose<double>& pose, const std::vector<Vec3<double>>& targets) {
+  if (reading.pose) return pose_weights().asDiagonal() * pose_error(node.measured_pose, pose);
+  return (node.measured - predicted_targets(registration, pose, targets)).reshaped();
+}
+
 void require_targets(const Robot& nominal, const PoseTable& data) {
+  if (reads_full_poses(data)) return;  // the pose is the measurement: no targets
   if (nominal.targets.empty())
     throw InputError(data.file, 1, 0,
                      "the table has target columns t1x..; the robot description needs the targets' nominal positions "
@@ -63,23 +90,33 @@ void require_targets(const Robot& nominal, const PoseTable& data) {
 
 // Enough nodes for the free parameters, with some left for the noise.
 void require_enough_nodes(std::size_t nodes, int free_parameters, const Robot& robot, const PoseTable& data) {
-  const std::size_t rows_per_node = 3 * std::size_t(data.target_columns());
+  const Reading reading = reading_of(data);
+  const std::size_t rows_per_node = std::size_t(reading.rows());
   const std::size_t needed = std::size_t(free_parameters) / rows_per_node + 3;
   if (nodes < needed)
     throw InputError(data.file, 0, 0,
-                     "only " + std::to_string(nodes) + " calibration nodes with target positions; " +
+                     "only " + std::to_string(nodes) + " calibration nodes with " +
+                         (reading.pose ? "measured poses; " : "target positions; ") +
                          std::to_string(free_parameters) + " free parameters measured by " +
                          std::to_string(rows_per_node) + " coordinates per node need at least " +
                          std::to_string(needed) + " (and poses that also turn the " +
                          robot.target_body() + ")");
 }
 
+// A row measured the way the fit reads the table: targets, or a full pose.
+bool measured(const PoseRow& r, const Reading& reading) { return reading.pose ? bool(r.measured) : bool(r.targets); }
+
 std::vector<TargetNode> target_nodes(const Robot& open, const FamilyErrors& family, const PoseTable& data) {
+  const Reading reading = reading_of(data);
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
-    if (r.role != Role::Cal || !r.targets || !usable(r)) continue;
+    if (r.role != Role::Cal || !measured(r, reading) || !usable(r)) continue;
     const Pose<double> commanded = Pose<double>::from_xyz_rpy(r.commanded);
-    TargetNode n{r.line, r.id, Vec6<double>::Zero(), r.targets->leftCols(data.target_columns()),
+    TargetNode n{r.line,
+                 r.id,
+                 Vec6<double>::Zero(),
+                 reading.pose ? TargetPoints(3, 0) : TargetPoints(r.targets->leftCols(reading.targets)),
+                 reading.pose ? Pose<double>::from_xyz_rpy(*r.measured) : Pose<double>{},
                  family.start(commanded)};
     if (const Status s = row_commands(open, r, n.q); s != Status::Ok)
       throw InputError(data.file, r.line, 0,
@@ -114,10 +151,12 @@ Pose<double> registration_of(const std::vector<TargetNode>& nodes, const std::ve
 
 // The design rows of one pose over the full x (3k × layout.size()): the
 // family's errors through the measurement map (H = M·B, seed 000 Eq. (10)
-// with the targets' M), then the instrument's own columns.
+// with the targets' M), then the instrument's own columns. A full pose: the
+// family's errors alone, M = diag(I, kOrientationWeightMm·I).
 Eigen::MatrixXd full_design_rows(const FamilyErrors& family, const Eigen::VectorXd& errors,
                                  const Pose<double>& registration, const std::vector<Vec3<double>>& targets,
-                                 const Pose<double>& pose, const TargetLayout& layout) {
+                                 const Pose<double>& pose, const TargetLayout& layout, const Reading& reading) {
+  if (reading.pose) return pose_weights().asDiagonal() * family.twist_columns(errors, pose);
   const Eigen::Index rows = 3 * layout.targets;
   Eigen::MatrixXd X(rows, layout.size());
   X.leftCols(layout.family) = MeasurementModel::targets(targets, registration).design(pose, family.twist_columns(errors, pose));
@@ -193,21 +232,25 @@ std::string describe(const WeakCombination& w) {
 }  // namespace
 
 bool uses_target_model(const Robot& robot, const PoseTable& data) {
-  if (!data.has_targets) return false;
+  if (!data.has_targets && !data.has_measured) return false;
   if (data.in_instrument_frame) return true;
   return !family_of(robot).reads_own_measurement(robot, data);
 }
+
+bool reads_full_poses(const PoseTable& data) { return !data.has_targets && data.has_measured; }
 
 TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data, const TargetCalibrationOptions& options) {
   require_targets(nominal, data);
   const Robot open = without_limits(nominal);  // measured rows: the machine was there (joint_limits.hpp)
   const std::unique_ptr<FamilyErrors> family = detail::family_errors(open);
-  const TargetLayout layout{family->size(), data.target_columns(), data.in_instrument_frame};
-  const Eigen::Index rows = 3 * layout.targets;
+  const Reading reading = reading_of(data);
+  const TargetLayout layout{family->size(), reading.targets, data.in_instrument_frame};
+  const Eigen::Index rows = reading.rows();
 
   TargetCalibration out;
+  out.full_pose = reading.pose;
   out.instrument_frame = data.in_instrument_frame;
-  out.targets = nominal.targets;
+  if (!reading.pose) out.targets = nominal.targets;
   out.names = family->names();
   out.convention = family->convention();
   // The nominal machine's poses, then (in the instrument frame) the
@@ -224,7 +267,7 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   Eigen::MatrixXd X(n, layout.size());
   for (std::size_t k = 0; k < nodes.size(); ++k)
     X.middleRows(rows * Eigen::Index(k), rows) =
-        full_design_rows(*family, errors, out.registration, out.targets, nodes[k].guess.pose, layout);
+        full_design_rows(*family, errors, out.registration, out.targets, nodes[k].guess.pose, layout, reading);
   const Eigen::MatrixXd N = null_space(family->convention_rows(layout, X), layout.size());
   const int p = int(N.cols());
   out.free_parameters = p;
@@ -251,8 +294,8 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
     for (std::size_t k = 0; k < nodes.size(); ++k) {
       Pose<double> pose;
       if (!family->pose(current.errors, nodes[k].q, current.guesses[k], pose)) continue;
-      const TargetPoints r = nodes[k].measured - predicted_targets(current.registration, pose, current.targets);
-      residual.segment(rows * Eigen::Index(k), rows) = r.reshaped();
+      const Eigen::VectorXd r = node_residual(reading, nodes[k], current.registration, pose, current.targets);
+      residual.segment(rows * Eigen::Index(k), rows) = r;
       rss += r.squaredNorm();
       ++reached;
     }
@@ -262,7 +305,8 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   auto linearise = [&](Eigen::MatrixXd& design, Eigen::VectorXd& y) {
     for (std::size_t k = 0; k < nodes.size(); ++k)
       X.middleRows(rows * Eigen::Index(k), rows) =
-          full_design_rows(*family, current.errors, current.registration, current.targets, current.guesses[k].pose, layout);
+          full_design_rows(*family, current.errors, current.registration, current.targets, current.guesses[k].pose,
+                           layout, reading);
     design = X * N;
     y = residual;
   };
@@ -311,8 +355,9 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
     const WeakCombination w = weakest_combinations(NV.col(p - 1) * NV.col(p - 1).transpose(), unit_weights(layout),
                                                    names, 1).front();
     throw InputError(data.file, 0, 0,
-                     "the calibration poses do not determine the model from " + std::to_string(layout.targets) +
-                         " target(s) (rank " + std::to_string(out.rank) + " of " + std::to_string(p) +
+                     "the calibration poses do not determine the model from " +
+                         (reading.pose ? std::string("full poses") : std::to_string(layout.targets) + " target(s)") +
+                         " (rank " + std::to_string(out.rank) + " of " + std::to_string(p) +
                          "); not determined: " + describe(w) + ". Poses that also turn the " +
                          nominal.target_body() + ", or more targets, separate them");
   }
@@ -353,6 +398,7 @@ std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, con
                                                        const std::vector<TargetRowInput>& rows) {
   const std::unique_ptr<FamilyErrors> family = detail::family_errors(nominal);
   const TargetLayout layout{family->size(), int(c.targets.size()), c.instrument_frame};
+  const Reading reading{c.full_pose, layout.targets};
   std::vector<std::optional<TargetRowModel>> out;
   for (const TargetRowInput& row : rows) {
     NodeGuess guess = family->start(row.commanded);
@@ -361,10 +407,16 @@ std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, con
       out.emplace_back();
       continue;
     }
-    const MeasurementModel tracker = MeasurementModel::targets(c.targets, c.registration);
-    m.residual = row.measured.leftCols(layout.targets).reshaped() - tracker.predict(m.pose);
-    m.M = tracker.map(m.pose);
-    m.H = full_design_rows(*family, c.errors, c.registration, c.targets, m.pose, layout) * c.convention_basis;
+    if (reading.pose) {
+      m.residual = pose_weights().asDiagonal() * pose_error(row.measured_pose, m.pose);
+      m.M = pose_weights().asDiagonal();
+      m.pose_rows = true;
+    } else {
+      const MeasurementModel tracker = MeasurementModel::targets(c.targets, c.registration);
+      m.residual = row.measured.leftCols(layout.targets).reshaped() - tracker.predict(m.pose);
+      m.M = tracker.map(m.pose);
+    }
+    m.H = full_design_rows(*family, c.errors, c.registration, c.targets, m.pose, layout, reading) * c.convention_basis;
     out.emplace_back(std::move(m));
   }
   return out;
@@ -373,7 +425,7 @@ std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, con
 TargetOutlierSearch target_outlier_search(const Robot& nominal, const PoseTable& data, const TargetCalibration& all,
                                           const TargetCalibrationOptions& options) {
   SequentialOutlierOptions so;
-  so.min_nodes = std::max<Eigen::Index>(8, Eigen::Index(all.free_parameters) / (3 * data.target_columns()) + 3);
+  so.min_nodes = std::max<Eigen::Index>(8, Eigen::Index(all.free_parameters) / reading_of(data).rows() + 3);
   ScreenedFit<TargetCalibration> s = screen_and_refit(
       data, all, [](const TargetCalibration& c) -> const LinearProblem& { return c.final_problem; },
       [](const TargetCalibration& c) -> const std::vector<NodeTest>& { return c.node_tests; },
@@ -386,11 +438,12 @@ PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd&
                                  const PoseTable& data) {
   const Robot nominal = without_limits(nominal_in);
   const std::unique_ptr<FamilyErrors> family = detail::family_errors(nominal);
+  const Reading reading = reading_of(data);
   std::vector<PoseErrorRow> rows;
   std::vector<UnevaluatedRow> unevaluated;
   std::size_t skipped = 0;
   for (const PoseRow& r : data.rows) {
-    if (!r.targets || !usable(r)) {
+    if (!measured(r, reading) || !usable(r)) {
       ++skipped;
       continue;
     }
@@ -403,6 +456,15 @@ PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd&
     NodeGuess guess = family->start(Pose<double>::from_xyz_rpy(r.commanded));
     if (!family->pose(errors, q, guess, pose)) {
       unevaluated.push_back({r.id, r.line, "FK of the model failed"});
+      continue;
+    }
+    if (reading.pose) {  // one row per pose, its whole error
+      PoseErrorRow row;
+      row.id = r.id;
+      row.group = data.has_layer && r.layer ? "layer " + std::to_string(*r.layer) : "";
+      row.role = r.role;
+      row.error = pose_error(Pose<double>::from_xyz_rpy(*r.measured), pose);
+      rows.push_back(std::move(row));
       continue;
     }
     const TargetPoints predicted = predicted_targets(registration, pose, targets);
@@ -418,7 +480,7 @@ PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd&
   }
   PoseErrorReport report = make_pose_error_report(std::move(rows), skipped);
   report.unevaluated = std::move(unevaluated);
-  report.target_points = true;
+  report.target_points = !reading.pose;
   return report;
 }
 
@@ -429,6 +491,7 @@ CalibrationModel target_model(const Robot& nominal, const TargetCalibration& c, 
   model.settings["iterations"] = double(c.history.size());
   model.settings["targets"] = double(c.targets.size());
   model.settings["instrument_frame"] = c.instrument_frame ? 1.0 : 0.0;
+  if (c.full_pose) model.settings["orientation_weight_mm"] = kOrientationWeightMm;
   model.data_file = data_file;
   for (std::size_t j = 0; j < c.names.size(); ++j)
     model.parameters.push_back({c.names[j], c.errors(Eigen::Index(j)), c.standard_error(Eigen::Index(j)), c.fitted[j]});

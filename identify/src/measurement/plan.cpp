@@ -35,9 +35,9 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 // The orientation rows of a pose measurement count as the displacement a
-// rotation causes this far from its axis (base_fit.hpp's convention), for the
-// default angle noise and the prior's scale.
-constexpr double kOrientationLeverMm = 200.0;
+// rotation causes kOrientationWeightMm from its axis (measurement_model.hpp),
+// for the default angle noise and the prior's scale.
+constexpr double kOrientationLeverMm = kOrientationWeightMm;
 // A joint range wider than this is "no limit" (core's ±1e9 defaults).
 constexpr double kUnbounded = 1e8;
 
@@ -176,8 +176,9 @@ class DesignRows {
     sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
     if (m == PlanMeasure::Pose) {
       if (own)
-        notes.push_back(std::string("kincal identify reads ") + family.own_measurement() +
-                        " targets (t1..t3), not full poses; this plan's numbers are for a full-pose instrument");
+        notes.push_back(std::string("this plan's numbers are for a full-pose instrument: kincal identify reads the "
+                                    "poses (mx..mrz) of a table without target columns, instead of ") +
+                        family.own_measurement());
     } else if (!robot.targets.empty()) {
       model_ = MeasurementModel::targets(robot.targets);
       notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "

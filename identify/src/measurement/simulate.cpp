@@ -65,10 +65,12 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   std::optional<MeasurementModel> tracker;
   if (!options.targets.empty())
     tracker = MeasurementModel::targets(options.targets, options.instrument_frame.value_or(Pose<double>{}));
-  const std::optional<MeasurementModel> own_targets = family.own_targets(actual);
+  const std::optional<MeasurementModel> own_targets =
+      options.pose_only ? std::nullopt : family.own_targets(actual);
   if (options.targets.size() > 3) throw InputError("--targets: at most three targets (t1..t3)");
   if (options.instrument_frame && !tracker)
     throw InputError("--instrument-frame applies to target measurements (--targets)");
+  if (options.pose_only && tracker) throw InputError("--pose-only measures poses; --targets measures targets: give one");
   PoseTable out = poses;
   out.has_measured = !tracker;
   out.target_count = tracker ? int(options.targets.size()) : own_targets ? own_targets->rows() / 3 : 0;

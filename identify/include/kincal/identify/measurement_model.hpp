@@ -25,6 +25,11 @@
 
 namespace kincal::identify {
 
+// A measured rotation counts as the displacement it causes this far from its
+// axis, so every row of a full pose is in mm and one noise level applies to
+// all (the 6-UPS's fit, the full-pose target fit, the diagnosis, the plan).
+inline constexpr double kOrientationWeightMm = 200.0;
+
 class MeasurementModel {
  public:
   static MeasurementModel full_pose();

@@ -34,6 +34,9 @@ struct SimulateOptions {
   // With `targets`: the pose of the robot's base frame in the instrument's
   // frame (the registration); the targets are written in the instrument frame.
   std::optional<Pose<double>> instrument_frame;
+  // Measure the pose alone: no columns of the family's own targets (the
+  // hybrid's gauge), as a 6-DOF instrument (a tracker's pose probe) gives.
+  bool pose_only = false;
 };
 
 struct SimulateReport {
@@ -50,8 +53,9 @@ Eigen::Matrix<double, 3, 3> gauge_targets(const HybridGeometry<double>& g, doubl
 // Simulates every row of `poses`: q = the row's q1..q6 if given, else the
 // nominal IK of the commanded pose; the actual pose = FK of `actual` from the
 // commanded pose (stewart) or the nominal IK's passive configuration (hybrid).
-// Output: measured pose columns (stewart), target positions t1..tk (stewart
-// with options.targets; noise_mm on each coordinate) or pose + gauge targets (hybrid); the
+// Output: measured pose columns (stewart), target positions t1..tk (either
+// family with options.targets; noise_mm on each coordinate) or pose + gauge
+// targets (hybrid; the pose alone with options.pose_only); the
 // input's id/layer/role/q/temp/time/dir columns are kept. A row whose IK or FK
 // fails keeps empty measurements, gets its reason in a `status` column, and is
 // reported through `warn` as "FILE:LINE: warning: ...".

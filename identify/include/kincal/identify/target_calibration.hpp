@@ -3,6 +3,12 @@
 // measured per pose in the robot's base frame or, with
 // PoseTable::in_instrument_frame, in the tracker's own frame.
 //
+// The same fit reads full poses (mx..mrz, the robot's base frame) for a
+// family whose own pipeline does not (the hybrid, whose own is seed 000's
+// gauge): the measurement model is then the full pose, 6 rows per node with
+// the rotations weighted by kOrientationWeightMm like the 6-UPS's own fit
+// (M = diag(I, 200 mm·I)), no registration and no targets.
+//
 // Unknowns: the family's error parameters (6-UPS: seed 001's 42 joint errors;
 // hybrid: seed 000's 150 source errors), the targets' positions (3 per
 // target) and, in the tracker's frame, its registration (6). Positions of
@@ -63,6 +69,7 @@ struct TargetCalibration {
   Eigen::VectorXd standard_error;  // of errors (0 where held)
   std::vector<bool> fitted;        // false: held at 0 by the convention (hybrid)
   std::string convention;          // as the identify line says it
+  bool full_pose = false;          // read full poses (no targets, no registration)
   bool instrument_frame = false;
   Pose<double> registration;       // base frame in the instrument frame (identity unless instrument_frame)
   Vec6<double> registration_standard_error = Vec6<double>::Zero();  // of its twist (mm, rad; instrument axes)
@@ -73,7 +80,7 @@ struct TargetCalibration {
   int free_parameters = 0;         // family + 3k (+ 6) minus the convention's rows
   int rank = 0;
   double condition_number = 0;     // of the column-scaled design in the convention's coordinates
-  double sigma_mm = 0;             // per target coordinate: (RSS / (n − p))^½
+  double sigma_mm = 0;             // per target coordinate (full pose: per weighted coordinate): (RSS / (n − p))^½
   std::vector<WeakCombination> weakest;  // the three worst-determined combinations, worst first
   std::vector<NodeTest> node_tests;
   std::vector<std::string> outliers;
@@ -83,17 +90,23 @@ struct TargetCalibration {
   Eigen::MatrixXd convention_basis;  // N: x = N·φ (x: the family's errors, registration twist if free, 3 per target)
 };
 
-// Whether a table is identified from its targets: it has target columns and
-//   - 6-UPS: no measured poses, or its targets are in the instrument's frame;
-//   - hybrid: the robot description names `targets` (without them the
-//     columns are seed 000's gauge), or they are in the instrument's frame.
+// Whether a table is identified by this fit:
+//   - it has target columns and
+//     - 6-UPS: no measured poses, or its targets are in the instrument's frame;
+//     - hybrid: the robot description names `targets` (without them the
+//       columns are seed 000's gauge), or they are in the instrument's frame;
+//   - or it has measured poses alone and the family's own pipeline does not
+//     read full poses (the hybrid).
 bool uses_target_model(const Robot& robot, const PoseTable& data);
+// Whether the fit reads the table's full poses rather than its targets.
+bool reads_full_poses(const PoseTable& data);
 
-// Identifies from the table's cal rows with target positions (t1..tk). The
-// robot description's `targets` are the nominal positions (their count must be
-// the table's). Throws InputError for a robot without `targets`, a count
-// mismatch, too few nodes, a design that does not determine the parameters
-// (naming the weakest combination), or FK failures.
+// Identifies from the table's cal rows with target positions (t1..tk), or
+// with measured poses where the table has no targets. The robot description's
+// `targets` are the nominal positions (their count must be the table's).
+// Throws InputError for a robot without `targets`, a count mismatch, too few
+// nodes, a design that does not determine the parameters (naming the weakest
+// combination), or FK failures.
 TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
                                     const TargetCalibrationOptions& options = {});
 
@@ -113,6 +126,8 @@ inline const OutlierReport* outlier_report_of(const TargetCalibration& c) { retu
 // zero for the nominal one — at the row's commands, q1..q6 or the nominal IK
 // of the commanded pose, then the registration and targets). One report row
 // per target point (id "ROW:tK"), position only (PoseErrorReport::target_points).
+// A table read by its full poses (reads_full_poses): one row per pose, the
+// pose error measured − model (registration and targets unused).
 PoseErrorReport target_residuals(const Robot& nominal, const Eigen::VectorXd& errors, const Pose<double>& registration,
                                  const std::vector<Vec3<double>>& targets, const PoseTable& data);
 
@@ -124,12 +139,14 @@ PoseErrorReport target_residuals(const Robot& nominal, const Eigen::VectorXd& er
 struct TargetRowInput {
   Vec6<double> q;
   Pose<double> commanded;
-  Eigen::Matrix<double, 3, 3> measured;
+  Eigen::Matrix<double, 3, 3> measured;  // targets (columns); unused for full poses
+  Pose<double> measured_pose;            // full poses; unused for targets
 };
 struct TargetRowModel {
   Pose<double> pose;
-  Eigen::VectorXd residual;
+  Eigen::VectorXd residual;  // full pose: rotations × kOrientationWeightMm, as M and H
   Eigen::MatrixXd M, H;
+  bool pose_rows = false;    // rows 3–5 are the weighted rotation (full pose)
 };
 std::vector<std::optional<TargetRowModel>> target_rows(const Robot& nominal, const TargetCalibration& c,
                                                        const std::vector<TargetRowInput>& rows);

@@ -292,7 +292,7 @@ AnyCalibrationTable HybridFamily::machine_table(const CalibrationModel& model) c
 
 std::string HybridFamily::missing_measurement(const Robot& robot, const PoseTable& data) const {
   if (data.target_columns() == 3 || uses_target_model(robot, data)) return {};
-  return "needs the gauge target columns t1x..t3z to diagnose a hybrid";
+  return "needs the gauge target columns t1x..t3z, or measured poses mx..mrz, to diagnose a hybrid";
 }
 
 std::unique_ptr<ActualMachine> HybridFamily::actual_machine(const Robot& nominal, const Robot& actual) const {

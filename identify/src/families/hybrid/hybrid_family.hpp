@@ -50,7 +50,11 @@ class HybridFamily final : public Family {
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
 
-  bool reads_own_measurement(const Robot& robot, const PoseTable&) const override { return robot.targets.empty(); }
+  // The gauge's columns, where the description names no targets of its own
+  // (full poses alone go to the target fit's full-pose reading).
+  bool reads_own_measurement(const Robot& robot, const PoseTable& data) const override {
+    return robot.targets.empty() && data.has_targets;
+  }
   std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;
   const char* own_measurement() const override { return "the hybrid's gauge"; }
   std::optional<MeasurementModel> own_targets(const Robot& robot) const override {

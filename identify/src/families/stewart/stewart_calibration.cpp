@@ -9,6 +9,7 @@
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/parameters.hpp"
 
 namespace kincal::identify {
@@ -83,9 +84,9 @@ std::vector<Node> calibration_nodes(const Robot& nominal, const PoseTable& data)
   return nodes;
 }
 
-// Rows of one node, weighted: rotations × L so both halves are in mm at the
-// platform (a rad and a mm are not commensurable otherwise).
-constexpr double kOrientationWeightMm = 200.0;
+// Rows of one node are weighted: rotations × kOrientationWeightMm
+// (measurement_model.hpp) so both halves are in mm at the platform (a rad and
+// a mm are not commensurable otherwise).
 
 // The damped step (calibrate_stewart): a trial machine whose weighted RSS is
 // more than this many times the last one's is a step too far; the step is
