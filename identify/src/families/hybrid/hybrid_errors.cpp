@@ -126,8 +126,9 @@ class HybridErrors final : public FamilyErrors {
     return keep;
   }
   std::string convention() const override {
-    return "the source errors the registration, the targets' positions or the errors before them absorb are held "
-           "at 0 (seed 000 Section 4.1's column selection, instrument first)";
+    return "the source errors the instrument's unknowns (registration, targets' positions: any there are) or the "
+           "errors before them absorb are held at 0 (seed 000 Section 4.1's column selection, instrument first, "
+           "1e-3 apart)";
   }
 
  private:
