@@ -458,7 +458,7 @@ int run_identify_stewart(const IdentifyArgs& a, const ki::Robot& robot) {
   return write_outputs(outputs, a, summary, screen, c.node_tests, before, after);
 }
 
-// The hybrid's: target columns go to the target fit, the gauge to seed 000's
+// The hybrid's: target columns (or full poses alone) go to the target fit, the gauge to seed 000's
 // coarse + fine pipeline.
 int run_identify_hybrid(const IdentifyArgs& a, const ki::Robot& robot) {
   const ki::PoseTable data = kincal_app::read_measurements(robot, a.data, a.instrument_frame);
