@@ -52,12 +52,14 @@ sanitizer_build=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_C
 # here. They run in the host stage; their code paths run under the
 # sanitizers in the shorter hybrid tests (BothMachines/HiddenEffect.*/hybrid_*
 # for compliance, backlash, cyclic and thermal, identifyBlunder.*).
+# HybridAcrossMachines repeats the single-machine tracker and full-pose tests
+# (HybridTracker.*, HybridFullPose.*, which run here) on 24 more machines.
 sanitize_skip='HybridDefaultBaseCompensatesAtLeastAsWellAsOls|ComplianceAndScaleTogetherFitLikeComplianceAlone'
 sanitize_skip+='|HiddenEffect.IsNamedFirstAcceptedAndCompensated/hybrid_scale'
 sanitize_skip+='|IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable|HoldsParametersTheDataCannotTellFromTheBase'
 sanitize_skip+='|HybridUpsActuatorScaleIsFittedFromAFarStart|HybridPairsAreNamedAndCompensatedNearTheFloor'
 sanitize_skip+='|HybridEliminationRoundsKeepTheMinimum|HybridRivalEffectsAreChosenByMallowsCp'
-sanitize_skip+='|HybridTrackerEffect'
+sanitize_skip+='|HybridTrackerEffect|HybridAcrossMachines'
 
 mkdir -p build
 for stage in "${stages[@]}"; do
