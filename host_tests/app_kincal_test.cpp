@@ -60,6 +60,16 @@ std::string write(const std::string& name, const std::string& text) {
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
+// The held-out layer of a hybrid poses file (its header and the L2-* rows),
+// written as `name` in the test folder.
+std::string layer_two(const std::string& name, const std::string& poses) {
+  std::string keep;
+  std::istringstream in(ki::read_text_file(poses));
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("id,", 0) == 0 || line.rfind("L2-", 0) == 0) keep += line + "\n";
+  return write(name, keep);
+}
+
 // `kincal errors --data FILE`'s RMS position error over all rows, µm (its "all" line).
 double errors_rms_um(const std::string& file) {
   const ToolRun r = run_tool("errors --data " + file);
@@ -181,13 +191,7 @@ TEST(appKincal, TheHybridFromFullPosesThroughTheTool) {
   const ToolRun ide = run_tool("identify --robot hybrid-seed000 --data " + meas + " --effects cyclic --out " + with_effect);
   ASSERT_EQ(ide.code, 0) << ide.err;
 
-  const std::string test_poses = write("hyfp_test_poses.csv", [&] {
-    std::string all = ki::read_text_file(ex + "/diagnosis_poses.csv"), keep;
-    std::istringstream in(all);
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("id,", 0) == 0 || line.rfind("L2-", 0) == 0) keep += line + "\n";
-    return keep;
-  }());
+  const std::string test_poses = layer_two("hyfp_test_poses.csv", ex + "/diagnosis_poses.csv");
   auto reached_um = [&](const std::string& poses, const std::string& tag) {  // the erroneous machine, no noise
     const std::string reached = kDir + "/hyfp_reached_" + tag + ".csv";
     EXPECT_EQ(run_tool("simulate --robot hybrid-seed000 --poses " + poses + hidden + " --pose-only --out " + reached).code, 0);
@@ -384,13 +388,7 @@ TEST(appKincal, IdentifyThenCompensateTheHybrid) {
   // fine (Liu) → Eq. (16) compensation → re-simulated on the erroneous machine.
   const std::string ex = kExamples + "/hybrid-seed000";
   const std::string meas = kDir + "/hy_meas.csv", model = kDir + "/hy_model.json", summary = kDir + "/hy_summary.json";
-  const std::string test_poses = write("hy_test_poses.csv", [&] {
-    std::string all = ki::read_text_file(ex + "/poses.csv"), keep;
-    std::istringstream in(all);
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("id,", 0) == 0 || line.rfind("L2-", 0) == 0) keep += line + "\n";
-    return keep;
-  }());
+  const std::string test_poses = layer_two("hy_test_poses.csv", ex + "/poses.csv");
   ASSERT_EQ(run_tool("simulate --robot hybrid-seed000 --poses " + ex + "/poses.csv --errors " + ex +
                      "/errors.csv --noise-mm 0.005 --seed 3 --out " + meas)
                 .code,
@@ -421,13 +419,7 @@ TEST(appKincal, TheHybridLoopFallsAtEveryStep) {
   const std::string hidden = " --effect cyclic:b2=0.003";
   const std::string meas = kDir + "/hyloop_meas.csv", diag = kDir + "/hyloop_diag.json";
   // (--json is required by diagnose; the printed report is what is checked.)
-  const std::string test_poses = write("hyloop_test_poses.csv", [&] {
-    std::string keep;
-    std::istringstream in(ki::read_text_file(ex + "/poses.csv"));
-    for (std::string line; std::getline(in, line);)
-      if (line.rfind("id,", 0) == 0 || line.rfind("L2-", 0) == 0) keep += line + "\n";
-    return keep;
-  }());
+  const std::string test_poses = layer_two("hyloop_test_poses.csv", ex + "/poses.csv");
   ASSERT_EQ(run_tool("simulate --robot hybrid-seed000 --poses " + ex + "/poses.csv --errors " + ex + "/errors.csv" +
                      hidden + " --noise-mm 0.005 --seed 11 --out " + meas)
                 .code,
