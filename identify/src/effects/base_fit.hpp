@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/measurement_model.hpp"
@@ -122,6 +123,16 @@ BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vec
 // thermal effect.
 PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
                                  const std::vector<std::optional<EffectNode>>& nodes, const EffectParameters<double>& e);
+
+// calibrate_with_effects (effect_calibration.hpp), and in `base_out` (if
+// given) the base model at its solution: the nodes on the table corrected for
+// the fitted effects — what fit_base(effect_corrected_table(...)) would fit
+// again (the diagnosis's re-linearisation). The alternation's last step is
+// that fit itself; the joint Gauss–Newton's base (the hybrid) is at the
+// minimum over base and effects, hence over the base with the effects held.
+CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
+                                        const EffectCalibrationOptions& options, EffectCalibrationReport* report,
+                                        BaseModel* base_out);
 
 // Effect columns of the nodes of `base` whose role matches `test`, stacked
 // like their residuals.

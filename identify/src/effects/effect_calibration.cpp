@@ -281,6 +281,13 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
 
 CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
                                         const EffectCalibrationOptions& options, EffectCalibrationReport* report) {
+  return detail::calibrate_with_effects(robot, data, effects, options, report, nullptr);
+}
+
+CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTable& data,
+                                                const std::vector<std::string>& effects,
+                                                const EffectCalibrationOptions& options,
+                                                EffectCalibrationReport* report, BaseModel* base_out) {
   std::vector<const Effect*> list;
   for (const std::string& name : effects) {
     const Effect* e = find_effect(name);
@@ -396,6 +403,7 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
   CalibrationModel model = base.model;
   model.effects = values;
   model.data_file = data.file;
+  if (base_out != nullptr) *base_out = std::move(base);
   return model;
 }
 
