@@ -357,6 +357,9 @@ class DiagnosisRun {
   Diagnosis d;
   std::vector<std::optional<EffectNode>> en;
   BaseModel base;
+  // The family's stepped fit that made `base` (fit_base_for_effects), if it
+  // has one: re-linearise's joint fit starts from it.
+  std::unique_ptr<detail::SteppedBaseFit> stepped_base;
   double orientation_factor = 1.0;
   Stack cal, test;
   std::vector<const Effect*> candidates;
@@ -400,7 +403,7 @@ void DiagnosisRun::check_inputs() {
 void DiagnosisRun::fit_base_model() {
   progress("fitting the base model on the cal rows");
   en = effect_nodes(robot, data);
-  base = detail::fit_base(robot, data, en, EstimatorKind::Ols, true);
+  base = detail::fit_base_for_effects(robot, data, en, stepped_base);
   d.base_model = base.description;
 }
 
@@ -651,7 +654,7 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   // it from seed 000's start cost the hybrid's diagnosis 169 M instructions
   // for the same minimum; #13).
   BaseModel moved;
-  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved);
+  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved, stepped_base.get());
   scale_orientation_rows(moved, orientation_factor);  // rows of orientation only
   bool same_nodes = moved.nodes.size() == base.nodes.size();
   for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)

@@ -1,8 +1,11 @@
 #include "effects/base_fit.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <memory>
 
+#include "estimate/least_squares_step.hpp"
 #include "families/family.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/joint_limits.hpp"
@@ -63,6 +66,60 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
 }
 
 }  // namespace
+
+BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate) {
+  const Index p = fit.parameters();
+  const double penalty = fit.penalty();
+  BaseModel base;
+  if (iterate) fit.start(data, false, true);
+  // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
+  // lower the objective (damped_gauss_newton): 6 plain steps were enough
+  // wherever seed 000's step started near the minimum; from the coarse
+  // machine the damped steps need more.
+  fit.keep();
+  const DescentCount count = damped_gauss_newton(
+      iterate ? 40 : 0,
+      [&] {
+        base = fit.evaluate(data, false);
+        return Evaluation{fit.objective(base), base.nodes.size()};
+      },
+      [&] { fit.keep(); }, [&] { fit.go_back(); },
+      [&](MatrixXd& H, VectorXd& y) {
+        Index rows = 0;
+        for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
+        const Index penalty_rows = penalty > 0 ? p : 0;
+        H.resize(rows + penalty_rows, p);
+        y.resize(rows + penalty_rows);
+        Index r = 0;
+        for (const NodeData& n : base.nodes) {
+          if (n.test) continue;
+          H.middleRows(r, n.r.size()) = n.H;
+          y.segment(r, n.r.size()) = n.r;
+          r += n.r.size();
+        }
+        if (penalty > 0) {
+          H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
+          y.tail(p) = -std::sqrt(penalty) * fit.away();
+        }
+      },
+      [&](const VectorXd& delta) { fit.step(delta); });
+  base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
+  fit.finish(base, data.file, count.steps);
+  return base;
+}
+
+BaseModel fit_base_for_effects(const Robot& robot, const PoseTable& data,
+                               const std::vector<std::optional<EffectNode>>& nodes,
+                               std::unique_ptr<SteppedBaseFit>& stepped) {
+  const Family& family = family_of(robot);
+  if (uses_target_model(robot, data) || !family.steps_base_with_effects()) {
+    stepped.reset();
+    return fit_base(robot, data, nodes, EstimatorKind::Ols, true);
+  }
+  // What the family's fit_base (OLS, finished) constructs, kept.
+  stepped = family.stepped_base_fit(robot, data, nodes, EstimatorKind::Ols, 0.0);
+  return descend_base(*stepped, data, true);
+}
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
                    std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -117,6 +118,24 @@ BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vec
                    std::optional<EstimatorKind> estimator = std::nullopt, bool finish_least_squares = false,
                    double ridge_k = 0);
 
+// Gauss–Newton (damped) of a stepped base fit alone to its minimum on
+// `data`, from the better of its current iterate and its fallback start
+// (`iterate`; else evaluated where it stands): the nodes at the solution with
+// their joint maps, and the fit's description. A family's fit_base on its
+// stepped fit (the hybrid's).
+BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate);
+
+// fit_base by OLS to the minimum, as a diagnosis fits it before it tests and
+// accepts effects, and in `stepped` the family's stepped fit that made it
+// (nullptr where the family alternates, or for target data). The joint fit of
+// base and accepted effects on the same table starts from it
+// (calibrate_with_effects' `from`) instead of constructing its own: the
+// family's first stages on the same data run once (the hybrid: seed 000's
+// coarse + fine, 72 M instructions; #13).
+BaseModel fit_base_for_effects(const Robot& robot, const PoseTable& data,
+                               const std::vector<std::optional<EffectNode>>& nodes,
+                               std::unique_ptr<SteppedBaseFit>& stepped);
+
 // The table as the effect-free model should see it: q1..q6 := the joints the
 // machine really had (commands + Δq of the joint-space effects), measured
 // poses / gauge targets scaled back about the base origin by 1/(1 + ε) of the
@@ -130,9 +149,12 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
 // again (the diagnosis's re-linearisation). The alternation's last step is
 // that fit itself; the joint Gauss–Newton's base (the hybrid) is at the
 // minimum over base and effects, hence over the base with the effects held.
+// `from` (if given): the stepped fit fit_base_for_effects made on the same
+// `data`, used by the first round instead of a new one (its start() resets
+// the iterate; OLS options only, the ones it was made with).
 CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
                                         const EffectCalibrationOptions& options, EffectCalibrationReport* report,
-                                        BaseModel* base_out);
+                                        BaseModel* base_out, SteppedBaseFit* from = nullptr);
 
 // Effect columns of the nodes of `base` whose role matches `test`, stacked
 // like their residuals.

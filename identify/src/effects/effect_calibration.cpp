@@ -287,7 +287,8 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
 CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTable& data,
                                                 const std::vector<std::string>& effects,
                                                 const EffectCalibrationOptions& options,
-                                                EffectCalibrationReport* report, BaseModel* base_out) {
+                                                EffectCalibrationReport* report, BaseModel* base_out,
+                                                SteppedBaseFit* from) {
   std::vector<const Effect*> list;
   for (const std::string& name : effects) {
     const Effect* e = find_effect(name);
@@ -332,7 +333,8 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
   // base 8 mm out). Any other (the 6-UPS), and target data: the alternation,
   // whose base fit (seed 001's iterated LS, the target fit) converges in a
   // few rounds and is not shrunk.
-  std::unique_ptr<detail::SteppedBaseFit> stepped;
+  std::unique_ptr<detail::SteppedBaseFit> owned;
+  detail::SteppedBaseFit* stepped = nullptr;
   const bool choose_k = options.estimator != EstimatorKind::Ols && !(options.ridge_k > 0);
   auto fit = [&]() {
     if (!family.steps_base_with_effects() || uses_target_model(robot, data)) {  // target data: the target fit, either family
@@ -340,10 +342,13 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
       rep.base = uses_target_model(robot, data) ? b.description : std::string(family.base_fit()) + " (OLS)";
       return b;
     }
-    const bool first = !stepped;
-    if (first) {
-      stepped = family.stepped_base_fit(robot, data, nodes,
-                                        options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, options.ridge_k);
+    const bool first = stepped == nullptr;
+    if (first && from != nullptr && !choose_k && !(options.ridge_k > 0)) {  // OLS: as `from` was made
+      stepped = from;
+    } else if (first) {
+      owned = family.stepped_base_fit(robot, data, nodes,
+                                      options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, options.ridge_k);
+      stepped = owned.get();
     } else {
       stepped->set_penalty(options.ridge_k);
     }

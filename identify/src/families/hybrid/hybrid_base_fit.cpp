@@ -225,48 +225,8 @@ std::unique_ptr<detail::SteppedBaseFit> HybridFamily::stepped_base_fit(
 detail::BaseModel HybridFamily::fit_base(const Robot& robot, const PoseTable& data,
                                          const std::vector<std::optional<EffectNode>>& en,
                                          std::optional<EstimatorKind> estimator, bool finish, double ridge_k) const {
-  using namespace detail;
-  HybridBaseFit fit(robot, data, en, estimator, finish, ridge_k);
-  const Index p = fit.parameters();
-  const double penalty = fit.penalty();
-  BaseModel base;
-  const bool iterate = finish || estimator == EstimatorKind::Ridge;
-  if (iterate) fit.start(data, false, true);
-  // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
-  // lower the objective (damped_gauss_newton): 6 plain steps were enough
-  // wherever seed 000's step started near the minimum; from the coarse
-  // machine the damped steps need more.
-  fit.keep();
-  const DescentCount count = damped_gauss_newton(
-      iterate ? 40 : 0,
-      [&] {
-        base = fit.evaluate(data, false);
-        return Evaluation{fit.objective(base), base.nodes.size()};
-      },
-      [&] { fit.keep(); }, [&] { fit.go_back(); },
-      [&](MatrixXd& H, VectorXd& y) {
-        Index rows = 0;
-        for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
-        const Index penalty_rows = penalty > 0 ? p : 0;
-        H.resize(rows + penalty_rows, p);
-        y.resize(rows + penalty_rows);
-        Index r = 0;
-        for (const NodeData& n : base.nodes) {
-          if (n.test) continue;
-          H.middleRows(r, n.r.size()) = n.H;
-          y.segment(r, n.r.size()) = n.r;
-          r += n.r.size();
-        }
-        if (penalty > 0) {
-          H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-          y.tail(p) = -std::sqrt(penalty) * fit.away();
-        }
-      },
-      [&](const VectorXd& delta) { fit.step(delta); });
-  const int steps = count.steps;
-  base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
-  fit.finish(base, data.file, steps);
-  return base;
+  detail::HybridBaseFit fit(robot, data, en, estimator, finish, ridge_k);
+  return detail::descend_base(fit, data, finish || estimator == EstimatorKind::Ridge);
 }
 
 }  // namespace kincal::identify
