@@ -77,14 +77,18 @@ BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate)
   // wherever seed 000's step started near the minimum; from the coarse
   // machine the damped steps need more.
   fit.keep();
+  // A trial is judged by its objective alone; the design rows are formed
+  // only at the iterates the descent linearises.
   const DescentCount count = damped_gauss_newton(
       iterate ? 40 : 0,
       [&] {
-        base = fit.evaluate(data, false);
-        return Evaluation{fit.objective(base), base.nodes.size()};
+        std::size_t nodes = 0;
+        const double objective = fit.trial_objective(data, nodes);
+        return Evaluation{objective, nodes};
       },
       [&] { fit.keep(); }, [&] { fit.go_back(); },
       [&](MatrixXd& H, VectorXd& y) {
+        base = fit.evaluate(data, false);
         Index rows = 0;
         for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
         const Index penalty_rows = penalty > 0 ? p : 0;

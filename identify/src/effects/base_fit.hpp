@@ -99,6 +99,11 @@ class SteppedBaseFit {
   virtual BaseModel evaluate(const PoseTable& data, bool with_joint_map) const = 0;
   // RSS of the cal rows of `base` plus the penalty.
   virtual double objective(const BaseModel& base) const = 0;
+  // objective(evaluate(data, false)) and the number of nodes it models,
+  // without the design rows: what a trial iterate (a step, a start) is
+  // judged by before it is linearised (#13: the design's error Jacobians
+  // were 90 % of an evaluation).
+  virtual double trial_objective(const PoseTable& data, std::size_t& nodes) const = 0;
   // Description, model (the current χ), ridge_k and column_away of `base`.
   virtual void finish(BaseModel& base, const std::string& data_file, int steps) const = 0;
 };

@@ -229,13 +229,18 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
   fit.keep();
   EffectValues accepted_values = values;
   detail::BaseModel base;
+  PoseTable table;  // the data corrected at the values last evaluated
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
-  // not lower the objective (detail::damped_gauss_newton).
+  // not lower the objective (detail::damped_gauss_newton). A trial is judged
+  // by its objective alone; the design rows are formed only at the iterates
+  // the descent linearises.
   const detail::DescentCount count = detail::damped_gauss_newton(
       4 * options.max_passes,
       [&] {
-        base = fit.evaluate(corrected(), true);
-        return detail::Evaluation{fit.objective(base), base.nodes.size()};
+        table = corrected();
+        std::size_t modelled = 0;
+        const double objective = fit.trial_objective(table, modelled);
+        return detail::Evaluation{objective, modelled};
       },
       [&] {
         fit.keep();
@@ -246,6 +251,7 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         values = accepted_values;
       },
       [&](MatrixXd& X, VectorXd& y) {
+        base = fit.evaluate(table, true);
         MatrixXd H;
         stack(base, false, H, y);
         rep.rms_cal_um.push_back(rms_um(y));

@@ -76,11 +76,11 @@ void HybridBaseFit::start(const PoseTable& data, bool own_estimate, bool current
   double best_objective = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < states.size(); ++i) {
     comp_ = states[i];
-    const BaseModel at = evaluate(data, false);
-    const double objective_here = objective(at);
-    if (at.nodes.size() > best_nodes || (at.nodes.size() == best_nodes && objective_here < best_objective)) {
+    std::size_t nodes_here = 0;
+    const double objective_here = trial_objective(data, nodes_here);
+    if (nodes_here > best_nodes || (nodes_here == best_nodes && objective_here < best_objective)) {
       best = i;
-      best_nodes = at.nodes.size();
+      best_nodes = nodes_here;
       best_objective = objective_here;
     }
   }
@@ -117,30 +117,43 @@ void HybridBaseFit::step(const VectorXd& delta) {
   }
 }
 
-BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) const {
+bool HybridBaseFit::ideal_pose(const PoseTable& data, std::size_t k, const HybridGeometry<double>& controller,
+                               Pose<double>& pose) const {
+  const PoseRow& row = data.rows[k];
+  const std::optional<EffectNode>& en = (*en_)[k];
+  if (!row.targets || !usable_row(row) || !en) return false;
+  const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+  HybridPassive<double> guess = g0_.home;
+  Vec6<double> q_ik;
+  if (hybrid_ik(g0_, commanded, q_ik, nullptr, &guess) != Status::Ok) return false;
+  return hybrid_fk(controller, joints_of(row, *en), guess, pose).status == Status::Ok;
+}
+
+bool HybridBaseFit::structural_twist(const Pose<double>& pose, Twist<double>& t) const {
   // Δη has zeros at the encoder entries, so the twist is structural only.
-  auto structural_twist = [&](const Pose<double>& pose, Twist<double>& t) {
-    HybridFrames<double> f;
-    HybridWrenches<double> w;
-    Vec3<double> angles;
-    return hybrid_frames_at_pose(comp_.nominal, pose, f, angles) == Status::Ok &&
-           hybrid_wrenches(comp_.nominal, f, w) == Status::Ok &&
-           hybrid_error_twist(comp_.nominal, twist_reference_, f, w, comp_.structural.data(), t) == Status::Ok;
-  };
+  HybridFrames<double> f;
+  HybridWrenches<double> w;
+  Vec3<double> angles;
+  return hybrid_frames_at_pose(comp_.nominal, pose, f, angles) == Status::Ok &&
+         hybrid_wrenches(comp_.nominal, f, w) == Status::Ok &&
+         hybrid_error_twist(comp_.nominal, twist_reference_, f, w, comp_.structural.data(), t) == Status::Ok;
+}
+
+VectorXd HybridBaseFit::gauge_residual(const PoseRow& row, const Pose<double>& modelled) const {
+  const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0_, robot_->gauge_radius, modelled);
+  VectorXd r(9);
+  for (int i = 0; i < 9; ++i) r(i) = row.targets->data()[i] - t.data()[i];
+  return r;
+}
+
+BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) const {
   BaseModel base;
   base.parameters = p_;
   MatrixXd B(6, HybridErrorModel::kParameterCount), B_kept(6, p_);
   const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
-  const std::vector<std::optional<EffectNode>>& en = *en_;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
-    const PoseRow& row = data.rows[k];
-    if (!row.targets || !usable_row(row) || !en[k]) continue;
-    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-    HybridPassive<double> guess = g0_.home;
-    Vec6<double> q_ik;
-    if (hybrid_ik(g0_, commanded, q_ik, nullptr, &guess) != Status::Ok) continue;
     Pose<double> predicted;
-    if (hybrid_fk(gc, joints_of(row, *en[k]), guess, predicted).status != Status::Ok) continue;
+    if (!ideal_pose(data, k, gc, predicted)) continue;
     // The structural twist at the pose the ideal machine reaches, joint
     // effects included (as the fine stage puts it and core's fixed point
     // p = apply_twist(target, −$_t(p)) inverts). Not at the commanded pose:
@@ -166,23 +179,36 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
       if (!ok) joint_map.setIdentity();
     }
     predicted = apply_twist(predicted, Twist<double>(B * comp_.structural));
-    const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0_, robot_->gauge_radius, predicted);
+    const PoseRow& row = data.rows[k];
     NodeData n;
     n.row = k;
     n.test = row.role == Role::Test;
-    n.r.resize(9);
-    for (int i = 0; i < 9; ++i) n.r(i) = row.targets->data()[i] - t.data()[i];
+    n.r = gauge_residual(row, predicted);
     const Eigen::Matrix<double, 9, 6> M = gauge_map(g0_, robot_->gauge_radius, predicted);
     n.M = M;
     for (Index j = 0; j < p_; ++j) B_kept.col(j) = B.col(cal_.kept[std::size_t(j)]);
     // One product of known inner size (9 × 6 by 6 × p), not a matrix–vector
     // product per kept column nor a general GEMM call.
     n.H.noalias() = M.lazyProduct(B_kept);
-    n.effect = *en[k];
+    n.effect = *(*en_)[k];
     n.joint_map = joint_map;
     base.nodes.push_back(std::move(n));
   }
   return base;
+}
+
+double HybridBaseFit::trial_objective(const PoseTable& data, std::size_t& nodes) const {
+  const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
+  double o = penalty_ * (values() - reference_).squaredNorm();
+  nodes = 0;
+  for (std::size_t k = 0; k < data.rows.size(); ++k) {
+    Pose<double> predicted;
+    Twist<double> t;
+    if (!ideal_pose(data, k, gc, predicted) || !structural_twist(predicted, t)) continue;
+    ++nodes;
+    if (data.rows[k].role != Role::Test) o += gauge_residual(data.rows[k], apply_twist(predicted, t)).squaredNorm();
+  }
+  return o;
 }
 
 double HybridBaseFit::objective(const BaseModel& base) const {

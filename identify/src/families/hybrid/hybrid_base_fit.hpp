@@ -51,10 +51,21 @@ class HybridBaseFit final : public SteppedBaseFit {
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const override;
   // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².
   double objective(const BaseModel& base) const override;
+  // The same objective with the structural twist by core's evaluation (no
+  // 6 × 150 B; equal to B·Δη to rounding).
+  double trial_objective(const PoseTable& data, std::size_t& nodes) const override;
   // Description, model (the current χ), ridge_k and column_away of `base`.
   void finish(BaseModel& base, const std::string& data_file, int steps) const override;
 
  private:
+  // Row k's pose on the ideal machine with the current encoder offsets (the
+  // pose the structural twist is evaluated at); false where IK or FK fails.
+  bool ideal_pose(const PoseTable& data, std::size_t k, const HybridGeometry<double>& controller,
+                  Pose<double>& pose) const;
+  // The structural twist B(p)·Δη at `pose` by core's evaluation.
+  bool structural_twist(const Pose<double>& pose, Twist<double>& t) const;
+  // Gauge residual measured − model at the ideal pose moved by the twist.
+  Eigen::VectorXd gauge_residual(const PoseRow& row, const Pose<double>& modelled) const;
   const Robot* robot_;
   const std::vector<std::optional<EffectNode>>* en_;
   HybridGeometry<double> g0_;
