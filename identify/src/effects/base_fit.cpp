@@ -39,7 +39,7 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
   std::vector<TargetRowInput> inputs;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
     const PoseRow& row = data.rows[k];
-    if (!(cal.full_pose ? bool(row.measured) : bool(row.targets)) || !usable_row(row) || !en[k]) continue;
+    if (!has_fit_measurement(row, cal.full_pose) || !usable_row(row) || !en[k]) continue;
     at.push_back(k);
     TargetRowInput input{joints_of(row, *en[k]), Pose<double>::from_xyz_rpy(row.commanded), {}, {}};
     if (cal.full_pose)
@@ -67,9 +67,33 @@ BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vect
 
 }  // namespace
 
-BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate) {
-  const Index p = fit.parameters();
+void stack(const BaseModel& base, bool test, MatrixXd& H, VectorXd& y) {
+  Index rows = 0;
+  for (const NodeData& n : base.nodes)
+    if (n.test == test) rows += n.r.size();
+  H.resize(rows, base.parameters);
+  y.resize(rows);
+  Index r = 0;
+  for (const NodeData& n : base.nodes) {
+    if (n.test != test) continue;
+    H.middleRows(r, n.r.size()) = n.H;
+    y.segment(r, n.r.size()) = n.r;
+    r += n.r.size();
+  }
+}
+
+void append_penalty_rows(const SteppedBaseFit& fit, MatrixXd& X, VectorXd& y) {
   const double penalty = fit.penalty();
+  if (!(penalty > 0)) return;
+  const Index p = fit.parameters(), n = X.rows();
+  X.conservativeResize(n + p, Eigen::NoChange);
+  X.bottomRows(p).setZero();
+  X.bottomLeftCorner(p, p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
+  y.conservativeResize(n + p);
+  y.tail(p) = -std::sqrt(penalty) * fit.away();
+}
+
+BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate) {
   BaseModel base;
   if (iterate) fit.start(data, false, true);
   // Gauss–Newton with Levenberg–Marquardt's damping when a step does not
@@ -89,22 +113,8 @@ BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate)
       [&] { fit.keep(); }, [&] { fit.go_back(); },
       [&](MatrixXd& H, VectorXd& y) {
         base = fit.evaluate(data, false);
-        Index rows = 0;
-        for (const NodeData& n : base.nodes) rows += n.test ? 0 : n.r.size();
-        const Index penalty_rows = penalty > 0 ? p : 0;
-        H.resize(rows + penalty_rows, p);
-        y.resize(rows + penalty_rows);
-        Index r = 0;
-        for (const NodeData& n : base.nodes) {
-          if (n.test) continue;
-          H.middleRows(r, n.r.size()) = n.H;
-          y.segment(r, n.r.size()) = n.r;
-          r += n.r.size();
-        }
-        if (penalty > 0) {
-          H.bottomRows(p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-          y.tail(p) = -std::sqrt(penalty) * fit.away();
-        }
+        stack(base, false, H, y);
+        append_penalty_rows(fit, H, y);
       },
       [&](const VectorXd& delta) { fit.step(delta); });
   base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need

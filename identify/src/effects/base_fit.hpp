@@ -97,12 +97,10 @@ class SteppedBaseFit {
   virtual void start(const PoseTable& data, bool own_estimate, bool current) = 0;
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   virtual BaseModel evaluate(const PoseTable& data, bool with_joint_map) const = 0;
-  // RSS of the cal rows of `base` plus the penalty.
-  virtual double objective(const BaseModel& base) const = 0;
-  // objective(evaluate(data, false)) and the number of nodes it models,
-  // without the design rows: what a trial iterate (a step, a start) is
-  // judged by before it is linearised (#13: the design's error Jacobians
-  // were 90 % of an evaluation).
+  // RSS of the cal rows of evaluate(data, false) plus the penalty, and the
+  // number of nodes it models, without forming the design rows: what a
+  // trial iterate (a step, a start) is judged by before it is linearised
+  // (#13: the design's error Jacobians were 90 % of an evaluation).
   virtual double trial_objective(const PoseTable& data, std::size_t& nodes) const = 0;
   // Description, model (the current χ), ridge_k and column_away of `base`.
   virtual void finish(BaseModel& base, const std::string& data_file, int steps) const = 0;
@@ -122,6 +120,13 @@ class SteppedBaseFit {
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
                    std::optional<EstimatorKind> estimator = std::nullopt, bool finish_least_squares = false,
                    double ridge_k = 0);
+
+// Residuals and base design rows of the nodes of one role (test or cal),
+// stacked in node order.
+void stack(const BaseModel& base, bool test, Eigen::MatrixXd& H, Eigen::VectorXd& y);
+// A ridge's rows √k·Δχ = −√k·(χ − χ_centre) appended under the design X (its
+// first fit.parameters() columns are the base's) and y; none when k = 0.
+void append_penalty_rows(const SteppedBaseFit& fit, Eigen::MatrixXd& X, Eigen::VectorXd& y);
 
 // Gauss–Newton (damped) of a stepped base fit alone to its minimum on
 // `data`, from the better of its current iterate and its fallback start

@@ -33,21 +33,7 @@ std::string number(double v) {
 
 double rms_um(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm() / double(v.size())) * 1000.0 : 0.0; }
 
-// Residual and base design of one role, stacked.
-void stack(const detail::BaseModel& base, bool test, MatrixXd& H, VectorXd& y) {
-  Index rows = 0;
-  for (const detail::NodeData& n : base.nodes)
-    if (n.test == test) rows += n.r.size();
-  H.resize(rows, base.parameters);
-  y.resize(rows);
-  Index r = 0;
-  for (const detail::NodeData& n : base.nodes) {
-    if (n.test != test) continue;
-    H.middleRows(r, n.r.size()) = n.H;
-    y.segment(r, n.r.size()) = n.r;
-    r += n.r.size();
-  }
-}
+using detail::stack;
 
 // [H G]: the base design and the columns of the effect parameters not held.
 MatrixXd joint_design(const Robot& robot, const std::vector<const Effect*>& list,
@@ -223,7 +209,6 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
                             bool from_own_estimate, bool from_current, EffectValues& values,
                             EffectCalibrationReport& rep) {
   const Index p = fit.parameters();
-  const double penalty = fit.penalty();
   auto corrected = [&] { return detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)); };
   fit.start(corrected(), from_own_estimate, from_current);
   fit.keep();
@@ -256,14 +241,7 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         stack(base, false, H, y);
         rep.rms_cal_um.push_back(rms_um(y));
         X = joint_design(robot, list, held, base, H);
-        if (penalty > 0) {
-          const Index n = X.rows();
-          X.conservativeResize(n + p, Eigen::NoChange);
-          X.bottomRows(p).setZero();
-          X.bottomLeftCorner(p, p) = std::sqrt(penalty) * MatrixXd::Identity(p, p);
-          y.conservativeResize(n + p);
-          y.tail(p) = -std::sqrt(penalty) * fit.away();
-        }
+        detail::append_penalty_rows(fit, X, y);
       },
       [&](const VectorXd& delta) {
         fit.step(delta.head(p));

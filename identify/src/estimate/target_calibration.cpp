@@ -103,14 +103,11 @@ void require_enough_nodes(std::size_t nodes, int free_parameters, const Robot& r
                          robot.target_body() + ")");
 }
 
-// A row measured the way the fit reads the table: targets, or a full pose.
-bool measured(const PoseRow& r, const Reading& reading) { return reading.pose ? bool(r.measured) : bool(r.targets); }
-
 std::vector<TargetNode> target_nodes(const Robot& open, const FamilyErrors& family, const PoseTable& data) {
   const Reading reading = reading_of(data);
   std::vector<TargetNode> nodes;
   for (const PoseRow& r : data.rows) {
-    if (r.role != Role::Cal || !measured(r, reading) || !usable(r)) continue;
+    if (r.role != Role::Cal || !has_fit_measurement(r, reading.pose) || !usable(r)) continue;
     const Pose<double> commanded = Pose<double>::from_xyz_rpy(r.commanded);
     TargetNode n{r.line,
                  r.id,
@@ -443,7 +440,7 @@ PoseErrorReport target_residuals(const Robot& nominal_in, const Eigen::VectorXd&
   std::vector<UnevaluatedRow> unevaluated;
   std::size_t skipped = 0;
   for (const PoseRow& r : data.rows) {
-    if (!measured(r, reading) || !usable(r)) {
+    if (!has_fit_measurement(r, reading.pose) || !usable(r)) {
       ++skipped;
       continue;
     }

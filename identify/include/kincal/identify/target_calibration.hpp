@@ -100,6 +100,10 @@ struct TargetCalibration {
 bool uses_target_model(const Robot& robot, const PoseTable& data);
 // Whether the fit reads the table's full poses rather than its targets.
 bool reads_full_poses(const PoseTable& data);
+// Whether a row has what the fit reads: a measured pose, or target positions.
+inline bool has_fit_measurement(const PoseRow& row, bool full_pose) {
+  return full_pose ? bool(row.measured) : bool(row.targets);
+}
 
 // Identifies from the table's cal rows with target positions (t1..tk), or
 // with measured poses where the table has no targets. The robot description's

@@ -211,12 +211,6 @@ double HybridBaseFit::trial_objective(const PoseTable& data, std::size_t& nodes)
   return o;
 }
 
-double HybridBaseFit::objective(const BaseModel& base) const {
-  double o = penalty_ * (values() - reference_).squaredNorm();
-  for (const NodeData& n : base.nodes) o += n.test ? 0.0 : n.r.squaredNorm();
-  return o;
-}
-
 void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int steps) const {
   const bool ridge = ridge_ || penalty_ > 0;  // a joint fit may set a k (set_penalty)
   base.description = "seed 000 coarse + fine model, " + std::to_string(p_) + " identifiable of " +

@@ -49,10 +49,9 @@ class HybridBaseFit final : public SteppedBaseFit {
   void start(const PoseTable& data, bool own_estimate, bool current) override;
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const override;
-  // RSS of the cal rows of `base` plus the ridge penalty k·‖χ − χ_coarse‖².
-  double objective(const BaseModel& base) const override;
-  // The same objective with the structural twist by core's evaluation (no
-  // 6 × 150 B; equal to B·Δη to rounding).
+  // RSS of the cal rows plus the ridge penalty k·‖χ − χ_coarse‖², the
+  // structural twist by core's evaluation (no 6 × 150 B; equal to B·Δη to
+  // rounding).
   double trial_objective(const PoseTable& data, std::size_t& nodes) const override;
   // Description, model (the current χ), ridge_k and column_away of `base`.
   void finish(BaseModel& base, const std::string& data_file, int steps) const override;
