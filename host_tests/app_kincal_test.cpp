@@ -187,6 +187,32 @@ TEST(appKincal, TheHybridFromFullPosesThroughTheTool) {
   ASSERT_EQ(d.code, 0) << d.err;
   const std::string dj = ki::read_text_file(diag);
   EXPECT_TRUE(contains(dj, "\"accepted\": [\n    \"cyclic\"")) << dj.substr(0, 600);
+  // A blunder (one cal pose 0.3 mm off in x, a mis-seated probe): the
+  // full-pose fit's outlier screen names that row and fits without it.
+  const std::string blunder = write("hyfp_blunder.csv", [&] {
+    std::istringstream in(ki::read_text_file(meas));
+    std::string out, line;
+    std::getline(in, line);
+    out += line + "\n";
+    const std::size_t mx = std::size_t(std::count(line.begin(), line.begin() + long(line.find(",mx,")) + 1, ','));
+    for (int k = 0; std::getline(in, line); ++k) {
+      if (k == 10) {  // a cal row of the first layer
+        std::vector<std::string> f;
+        std::istringstream fields(line);
+        for (std::string v; std::getline(fields, v, ',');) f.push_back(v);
+        f[mx] = std::to_string(std::stod(f[mx]) + 0.3);
+        line.clear();
+        for (std::size_t i = 0; i < f.size(); ++i) line += (i ? "," : "") + f[i];
+      }
+      out += line + "\n";
+    }
+    return out;
+  }());
+  const ToolRun bl = run_tool("identify --robot hybrid-seed000 --data " + blunder + " --out " + kDir + "/hyfp_blunder.json");
+  ASSERT_EQ(bl.code, 0) << bl.err;
+  EXPECT_TRUE(contains(bl.out, "hyfp_blunder.csv:12: node 'L1-24'")) << bl.out;
+  EXPECT_TRUE(contains(bl.out, "the model is fitted without them")) << bl.out;
+
   const std::string with_effect = kDir + "/hyfp_cyclic.json";
   const ToolRun ide = run_tool("identify --robot hybrid-seed000 --data " + meas + " --effects cyclic --out " + with_effect);
   ASSERT_EQ(ide.code, 0) << ide.err;
