@@ -11,6 +11,7 @@
 #include <random>
 #include <string>
 
+#include "../identify/src/estimate/least_squares_step.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -586,5 +587,35 @@ TEST(identifyEstimators, PartialRidgeGcvMatchesTheAugmentedSolve) {
       const double want = reference(X, z, p, k);
       EXPECT_NEAR(gcv(k), want, 1e-7 * want) << "trial " << trial << ", k = " << k;
     }
+  }
+}
+
+// The diagnosis's "confounded" share of a candidate column, read off the QR
+// its fit appends columns to (AppendedColumnsLeastSquares::share_in_span),
+// against the projection on the left singular vectors of an independent SVD
+// of the whole design (BDCSVD of X itself, not of a triangular factor): full
+// rank with columns of very different scales (mm against rad-like 1e-4), and
+// rank-deficient with one column an exact combination of two others, where
+// Q spans a direction X does not.
+TEST(identifyEstimators, ShareInSpanMatchesTheProjectionOnAnIndependentSvd) {
+  std::mt19937_64 rng(41);
+  for (int trial = 0; trial < 2; ++trial) {
+    const Index n = 90, p = 12;
+    MatrixXd X = design_with_spectrum(n, p, 1.0, 1e4, rng);
+    for (Index j = 0; j < p; ++j) X.col(j) *= std::pow(10.0, double(j % 4) - 2.0);
+    if (trial == 1) X.col(5) = 2.0 * X.col(1) - 0.3 * X.col(8);
+    const Eigen::BDCSVD<MatrixXd> svd(X, Eigen::ComputeThinU);
+    Index rank = 0;
+    for (Index i = 0; i < p; ++i) rank += svd.singularValues()(i) > 1e-9 * svd.singularValues()(0);
+    ASSERT_EQ(rank, trial == 0 ? p : p - 1);
+    const MatrixXd U = svd.matrixU().leftCols(rank);
+    const kincal::identify::detail::AppendedColumnsLeastSquares ls(X);
+    for (const double inside : {0.0, 0.3, 0.9, 0.999, 1.0}) {
+      const VectorXd a = X * gaussian(p, rng), b = gaussian(n, rng);
+      const VectorXd g = inside * a / a.norm() + (1.0 - inside) * b / b.norm();
+      const double want = (U.transpose() * g).squaredNorm() / g.squaredNorm();
+      EXPECT_NEAR(ls.share_in_span(g), want, 1e-10) << "trial " << trial << ", inside " << inside;
+    }
+    EXPECT_EQ(ls.share_in_span(VectorXd::Zero(n)), 0.0);
   }
 }

@@ -534,11 +534,9 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
   const double cp_variance =
       noise_known ? sigma_mm * sigma_mm : current.rss / double(std::max<Index>(1, n_cal - current.rank));
   // The current model's design, factorised once per step (it was twice per
-  // candidate): for each candidate's share inside its span, and as the QR
-  // that each candidate's fit appends its columns to.
-  const MatrixXd X = design(cal, accepted);
-  const LeastSquares current_ls(X);
-  const detail::AppendedColumnsLeastSquares with_candidate(X);
+  // candidate, then twice per step): the QR that each candidate's fit appends
+  // its columns to, and that gives each candidate's share inside its span.
+  const detail::AppendedColumnsLeastSquares with_candidate(design(cal, accepted));
   std::vector<EffectTest> tests;
   for (const Effect* e : candidates) {
     if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
@@ -563,10 +561,8 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
       double sum = 0;
       int counted = 0;
       for (Index j = 0; j < G.cols(); ++j) {
-        const double g2 = G.col(j).squaredNorm();
-        if (!(g2 > 0)) continue;
-        const VectorXd inside = X * current_ls.solve(G.col(j));
-        sum += std::min(1.0, inside.squaredNorm() / g2);
+        if (!(G.col(j).squaredNorm() > 0)) continue;
+        sum += std::min(1.0, with_candidate.share_in_span(G.col(j)));
         ++counted;
       }
       t.confounded = counted > 0 ? sum / counted : 1.0;
@@ -958,6 +954,17 @@ void DiagnosisRun::by_covariate() {
     for (const NodeData& n : base.nodes) c.value.push_back(n.effect.time.value_or(0));
     covs.push_back(c);
   }
+  // Under noise the tool-point residual's coordinates have σ of order
+  // σ·√(3/rows) per node (LS through M); the slope χ² uses that. The same
+  // for every covariate: computed once (#13: it was 2 500 6 × 6 inverses).
+  double tp_var = 0;
+  if (sigma_mm > 0) {
+    for (const NodeData& n : base.nodes) {
+      const MatrixXd MtM = n.M.transpose() * n.M;
+      tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
+    }
+    tp_var = tp_var / double(base.nodes.size()) * sigma_mm * sigma_mm;
+  }
   double best_p = 1;
   std::string best_name;
   ResidualGroup best_group;
@@ -982,14 +989,6 @@ void DiagnosisRun::by_covariate() {
     g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
     d.by_covariate.push_back(g);
     if (sigma_mm > 0) {
-      // Under noise the tool-point residual's coordinates have σ of order
-      // σ·√(3/rows) per node (LS through M); the slope χ² uses that.
-      double tp_var = 0;
-      for (std::size_t k = 0; k < base.nodes.size(); ++k) {
-        const MatrixXd MtM = base.nodes[k].M.transpose() * base.nodes[k].M;
-        tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
-      }
-      tp_var = tp_var / double(base.nodes.size()) * sigma_mm * sigma_mm;
       const double chi2 = explained_ss / tp_var;
       const double p = chi2_upper_tail(chi2, 3.0);
       if (p < best_p) best_p = p, best_name = c.name, best_group = g;

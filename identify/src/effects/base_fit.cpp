@@ -117,7 +117,11 @@ BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate)
         append_penalty_rows(fit, H, y);
       },
       [&](const VectorXd& delta) { fit.step(delta); });
-  base = fit.evaluate(data, true);  // at the solution, with the joint maps the effect columns need
+  // At the solution, with the joint maps the effect columns need.
+  if (count.ends_linearised)
+    fit.add_joint_maps(data, base);
+  else
+    base = fit.evaluate(data, true);
   fit.finish(base, data.file, count.steps);
   return base;
 }

@@ -97,6 +97,10 @@ class SteppedBaseFit {
   virtual void start(const PoseTable& data, bool own_estimate, bool current) = 0;
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   virtual BaseModel evaluate(const PoseTable& data, bool with_joint_map) const = 0;
+  // The joint maps of `base`, evaluate(data, false) at the current χ, filled
+  // in: evaluate(data, true) without forming the design rows again (a descent
+  // that ends on an iterate it linearised has them; #13).
+  virtual void add_joint_maps(const PoseTable& data, BaseModel& base) const = 0;
   // RSS of the cal rows of evaluate(data, false) plus the penalty, and the
   // number of nodes it models, without forming the design rows: what a
   // trial iterate (a step, a start) is judged by before it is linearised

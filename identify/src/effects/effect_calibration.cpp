@@ -1,6 +1,7 @@
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/target_calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -215,6 +216,10 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
   EffectValues accepted_values = values;
   detail::BaseModel base;
   PoseTable table;  // the data corrected at the values last evaluated
+  // The joint maps enter only the columns of joint-space effects (a thermal
+  // effect's are the tool twist itself): formed where a step needs them.
+  const bool joint_maps =
+      std::any_of(list.begin(), list.end(), [](const Effect* e) { return e->acts_on_joints(); });
   // Gauss–Newton, with Levenberg–Marquardt's damping after a step that does
   // not lower the objective (detail::damped_gauss_newton). A trial is judged
   // by its objective alone; the design rows are formed only at the iterates
@@ -236,7 +241,7 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         values = accepted_values;
       },
       [&](MatrixXd& X, VectorXd& y) {
-        base = fit.evaluate(table, true);
+        base = fit.evaluate(table, joint_maps);
         MatrixXd H;
         stack(base, false, H, y);
         rep.rms_cal_um.push_back(rms_um(y));
@@ -254,9 +259,13 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         }
       });
   rep.passes += count.linearisations;
-  // The base at the accepted iterate (the last evaluation may belong to a
-  // step that was undone).
-  base = fit.evaluate(corrected(), true);
+  // The base at the accepted iterate, with the joint maps a caller's effect
+  // columns need (the last evaluation may belong to a step that was undone;
+  // the last linearisation, if at this iterate, has the rest).
+  if (!count.ends_linearised)
+    base = fit.evaluate(corrected(), true);
+  else if (!joint_maps)
+    fit.add_joint_maps(corrected(), base);
   fit.finish(base, data.file, rep.passes);
   return base;
 }

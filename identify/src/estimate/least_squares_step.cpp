@@ -35,6 +35,29 @@ VectorXd ScaledLeastSquares::solve(const VectorXd& y) const { return scale_.cwis
 
 AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X0_(X0), scale0_(column_scale(X0)) {
   qr0_.compute(X0 * scale0_.cwiseInverse().asDiagonal());
+  const Index p0 = X0.cols();
+  if (X0.rows() >= p0 && p0 > 0) {
+    r0_.setThreshold(kRankThreshold);
+    r0_.compute(MatrixXd(qr0_.matrixQR().topRows(p0).triangularView<Eigen::Upper>()));
+    rank0_ = r0_.rank();
+  }
+}
+
+double AppendedColumnsLeastSquares::share_in_span(const VectorXd& g) const {
+  const double g2 = g.squaredNorm();
+  if (!(g2 > 0)) return 0.0;
+  const Index n = X0_.rows(), p0 = X0_.cols();
+  if (p0 == 0) return 0.0;
+  if (n < p0) {  // wider than tall: no triangular R0 to read the span off
+    const VectorXd inside = X0_ * ScaledLeastSquares(X0_).solve(g);
+    return inside.squaredNorm() / g2;
+  }
+  VectorXd v = (qr0_.householderQ().adjoint() * g).head(p0);  // g in Q's first p0 directions
+  if (rank0_ < p0) {
+    v = r0_.householderQ().adjoint() * v;  // … and in range(R0)'s basis
+    return v.head(rank0_).squaredNorm() / g2;
+  }
+  return v.squaredNorm() / g2;
 }
 
 VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y, Index& rank) const {
@@ -68,6 +91,33 @@ VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y
 }
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) { return ScaledLeastSquares(X).solve(y); }
+
+DescentStep::DescentStep(const MatrixXd& X, const VectorXd& y) : scale_(column_scale(X)), y_(y) {
+  S_ = X * scale_.cwiseInverse().asDiagonal();
+  const Index p = S_.cols();
+  N_ = MatrixXd::Zero(p, p);
+  N_.selfadjointView<Eigen::Lower>().rankUpdate(S_.transpose());
+  Sty_ = S_.transpose() * y_;
+  llt_.compute(N_);
+  normal_ok_ = p > 0 && llt_.info() == Eigen::Success && llt_.rcond() > 1e-12;
+}
+
+VectorXd DescentStep::refined(const Eigen::LLT<MatrixXd>& llt, double damping) const {
+  VectorXd z = llt.solve(Sty_);
+  const VectorXd r = y_ - S_ * z;
+  z += llt.solve(VectorXd(S_.transpose() * r - damping * z));
+  return z;
+}
+
+VectorXd DescentStep::solve(double damping) const {
+  if (!(damping > 0)) {
+    if (normal_ok_) return scale_.cwiseInverse().asDiagonal() * refined(llt_, 0.0);
+    return scaled_least_squares(S_, y_).cwiseQuotient(scale_);  // S's own columns are unit (or zero)
+  }
+  MatrixXd A = N_;
+  A.diagonal().array() += damping;
+  return scale_.cwiseInverse().asDiagonal() * refined(Eigen::LLT<MatrixXd>(A), damping);
+}
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y, double damping) {
   if (!(damping > 0)) return scaled_least_squares(X, y);

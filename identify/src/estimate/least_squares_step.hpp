@@ -3,9 +3,11 @@
 // the hybrid fine stage's re-linearisation.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cstddef>
 #include <limits>
+#include <optional>
 
 #include "kincal/identify/decompositions.hpp"
 
@@ -41,11 +43,22 @@ class AppendedColumnsLeastSquares {
   explicit AppendedColumnsLeastSquares(const Eigen::MatrixXd& X0);
   // The minimum-norm δ (X0's coefficients first) and the rank of [X0, G].
   Eigen::VectorXd solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& y, Eigen::Index& rank) const;
+  // ‖P·g‖² / ‖g‖² (0 for g = 0), P the orthogonal projector on the span of
+  // X0 at ScaledLeastSquares(X0)'s rank: the share of g the design already
+  // explains (the diagnosis's "confounded"). From the same QR: the span of
+  // X0 is Q·range(R0), and range(R0) is read off a rank-revealing
+  // decomposition of the p0-square R0 (its pivots are those of X0·D0⁻¹:
+  // an orthogonal transform keeps the column norms).
+  double share_in_span(const Eigen::VectorXd& g) const;
 
  private:
   Eigen::MatrixXd X0_;
   Eigen::VectorXd scale0_;
   Eigen::HouseholderQR<Eigen::MatrixXd> qr0_;
+  // R0's rank-revealing QR (rows ≥ columns only); rank0_ < p0: X0 is
+  // rank-deficient and the share is taken on its first rank0_ directions.
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> r0_;
+  Eigen::Index rank0_ = 0;
 };
 
 // ScaledLeastSquares(X).solve(y): the one solve of every Gauss–Newton step
@@ -57,6 +70,39 @@ Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::Vect
 // well-determined ones, where halving a Gauss–Newton step shrinks all alike.
 // λ = 0 is the undamped step above.
 Eigen::VectorXd scaled_least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, double damping);
+
+// Every step of one linearisation of a damped descent (damped_gauss_newton):
+// the undamped step and the damped ones after refusals, from one
+// factorisation. On the column-scaled design S = X·D⁻¹ the normal matrix
+// N = SᵀS by a symmetric rank update (level-3 products) and its Cholesky
+// factor, each solve corrected by one step of iterative refinement
+// (r = y − S·z, z += N⁻¹·(Sᵀr − λ·z)): the corrected semi-normal equations,
+// as accurate as a QR of S while cond(S)²·ε < 1 (Björck, Numerical Methods
+// for Least Squares Problems, §2.5). Taken where N's reciprocal condition
+// estimate exceeds 1e-12, i.e. cond(S) below about 10⁶ — the hybrid's base
+// designs have 1.7e5; otherwise the undamped step is
+// scaled_least_squares(X, y)'s (rank-revealing, minimum norm). A damped
+// N + λ·I is always that well conditioned (λ ≥ 1e-3 against unit columns).
+// A Householder QR of the 882 × 48 design is ~7.5 M instructions, the normal
+// matrix ~1 M: a descent of 8 solves paid 60 M for its steps (#13).
+class DescentStep {
+ public:
+  DescentStep(const Eigen::MatrixXd& X, const Eigen::VectorXd& y);
+  // The step δ for damping λ (0: undamped), in X's units.
+  Eigen::VectorXd solve(double damping) const;
+  // Whether the undamped step comes from the normal equations (else from
+  // the rank-revealing decomposition of S).
+  bool normal_equations() const { return normal_ok_; }
+
+ private:
+  Eigen::VectorXd refined(const Eigen::LLT<Eigen::MatrixXd>& llt, double damping) const;
+  Eigen::VectorXd scale_;
+  Eigen::MatrixXd S_;
+  Eigen::VectorXd y_, Sty_;
+  Eigen::MatrixXd N_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+  bool normal_ok_ = false;
+};
 
 // Levenberg–Marquardt's damping schedule around a Gauss–Newton iteration: 0
 // (the plain step) while steps descend; after a step that does not, 1e-3 and
@@ -86,9 +132,12 @@ struct Damping {
 // 1.4 % in 40 such steps), when no damping up to Damping::kLargest
 // descends, or after `max_iterations` evaluations. Ends at the accepted
 // iterate (restored). Returns how many linearisations it made and how many
-// of their steps it took.
+// of their steps it took, and whether the iterate it ends at is the one it
+// linearised last (then the caller's design rows of that linearisation
+// belong to the solution and need not be formed again).
 struct DescentCount {
   int linearisations = 0, steps = 0;
+  bool ends_linearised = false;
 };
 struct Evaluation {
   double objective;
@@ -102,23 +151,27 @@ DescentCount damped_gauss_newton(int max_iterations, Evaluate evaluate, Save sav
   double accepted_objective = std::numeric_limits<double>::infinity();
   Eigen::MatrixXd X;
   Eigen::VectorXd y;
+  std::optional<DescentStep> step;  // the last linearisation's, for its damped retries
   std::size_t modelled = 0;  // nodes the start models: a step that loses one is no better
   for (int iteration = 0; iteration < max_iterations; ++iteration) {
     const Evaluation at = evaluate();
     if (iteration == 0) modelled = at.nodes;
     if (!(at.objective <= accepted_objective) || at.nodes < modelled) {  // not lower: undone, damped more
       restore();
-      if (X.size() == 0 || !damping.refused()) break;
-      apply(scaled_least_squares(X, y, damping.lambda));
+      if (!step || !damping.refused()) break;
+      apply(step->solve(damping.lambda));
       continue;
     }
     const bool crawling = damping.lambda > 0 && accepted_objective - at.objective < 1e-3 * accepted_objective;
     if (iteration > 0) damping.accepted();
     accepted_objective = at.objective;
     save();
+    count.ends_linearised = false;
     if (crawling) break;
     linearise(X, y);
-    const Eigen::VectorXd delta = scaled_least_squares(X, y, damping.lambda);
+    count.ends_linearised = true;
+    step.emplace(X, y);
+    const Eigen::VectorXd delta = step->solve(damping.lambda);
     ++count.linearisations;
     if (damping.lambda == 0 && (X * delta).squaredNorm() <= 1e-6 * y.squaredNorm()) break;
     apply(delta);

@@ -162,22 +162,9 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
     // a compensation that evaluate it at different points disagree by
     // micrometres (clean hybrid data: 15.6 µm compensated; 2.24 µm here).
     if (comp_.model->error_jacobian(predicted, B) != Status::Ok) continue;
-    // with_joint_map: also ∂$_t/∂p per node by central differences of
-    // B(p)·Δη (NodeData::joint_map), for the effect columns.
-    Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
-    if (with_joint_map) {
-      bool ok = true;
-      for (int i = 0; i < 6 && ok; ++i) {
-        const double h = i < 3 ? 1e-3 : 1e-6;  // mm, rad: B·Δη is smooth on this scale
-        Twist<double> d = Twist<double>::Zero();
-        d(i) = h;
-        Twist<double> plus, minus;
-        ok = structural_twist(apply_twist(predicted, d), plus) &&
-             structural_twist(apply_twist(predicted, Twist<double>(-d)), minus);
-        if (ok) joint_map.col(i) += (plus - minus) / (2 * h);
-      }
-      if (!ok) joint_map.setIdentity();
-    }
+    // with_joint_map: also the joint map per node, for the effect columns.
+    const Eigen::Matrix<double, 6, 6> joint_map =
+        with_joint_map ? joint_map_at(predicted) : Eigen::Matrix<double, 6, 6>::Identity();
     predicted = apply_twist(predicted, Twist<double>(B * comp_.structural));
     const PoseRow& row = data.rows[k];
     NodeData n;
@@ -195,6 +182,30 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
     base.nodes.push_back(std::move(n));
   }
   return base;
+}
+
+// ∂$_t/∂p by central differences of B(p)·Δη.
+Eigen::Matrix<double, 6, 6> HybridBaseFit::joint_map_at(const Pose<double>& pose) const {
+  Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
+  for (int i = 0; i < 6; ++i) {
+    const double h = i < 3 ? 1e-3 : 1e-6;  // mm, rad: B·Δη is smooth on this scale
+    Twist<double> d = Twist<double>::Zero();
+    d(i) = h;
+    Twist<double> plus, minus;
+    if (!structural_twist(apply_twist(pose, d), plus) || !structural_twist(apply_twist(pose, Twist<double>(-d)), minus))
+      return Eigen::Matrix<double, 6, 6>::Identity();
+    joint_map.col(i) += (plus - minus) / (2 * h);
+  }
+  return joint_map;
+}
+
+void HybridBaseFit::add_joint_maps(const PoseTable& data, BaseModel& base) const {
+  const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
+  for (NodeData& n : base.nodes) {
+    Pose<double> predicted;
+    n.joint_map = ideal_pose(data, n.row, gc, predicted) ? joint_map_at(predicted)
+                                                         : Eigen::Matrix<double, 6, 6>::Identity();
+  }
 }
 
 double HybridBaseFit::trial_objective(const PoseTable& data, std::size_t& nodes) const {

@@ -49,6 +49,7 @@ class HybridBaseFit final : public SteppedBaseFit {
   void start(const PoseTable& data, bool own_estimate, bool current) override;
   // Nodes (residual, M, H; the joint maps if asked) at the current χ on `data`.
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const override;
+  void add_joint_maps(const PoseTable& data, BaseModel& base) const override;
   // RSS of the cal rows plus the ridge penalty k·‖χ − χ_coarse‖², the
   // structural twist by core's evaluation (no 6 × 150 B; equal to B·Δη to
   // rounding).
@@ -63,6 +64,8 @@ class HybridBaseFit final : public SteppedBaseFit {
                   Pose<double>& pose) const;
   // The structural twist B(p)·Δη at `pose` by core's evaluation.
   bool structural_twist(const Pose<double>& pose, Twist<double>& t) const;
+  // I + ∂$_t/∂p at `pose` (NodeData::joint_map); identity where a twist fails.
+  Eigen::Matrix<double, 6, 6> joint_map_at(const Pose<double>& pose) const;
   // Gauge residual measured − model at the ideal pose moved by the twist.
   Eigen::VectorXd gauge_residual(const PoseRow& row, const Pose<double>& modelled) const;
   const Robot* robot_;
