@@ -619,3 +619,40 @@ TEST(identifyEstimators, ShareInSpanMatchesTheProjectionOnAnIndependentSvd) {
     EXPECT_EQ(ls.share_in_span(VectorXd::Zero(n)), 0.0);
   }
 }
+
+// The damped descent's steps (DescentStep: corrected semi-normal equations)
+// against an independent solve of each problem: the SVD of the column-scaled
+// design for the undamped least squares (minimum norm), and a column-pivoted
+// QR of the augmented [S; √λ·I] for the damped one. A design of scaled
+// condition 1e5 (the hybrid's base designs: 1.7e5) with columns in units
+// 1e-2 … 1e1 apart, and one with an exact dependency, where the normal
+// equations are not used and the minimum-norm step is.
+TEST(identifyEstimators, DescentStepsMatchAnIndependentSolveOfEachProblem) {
+  std::mt19937_64 rng(43);
+  for (int trial = 0; trial < 2; ++trial) {
+    const Index n = 300, p = 20;
+    MatrixXd X = design_with_spectrum(n, p, 1.0, 1e5, rng);
+    for (Index j = 0; j < p; ++j) X.col(j) *= std::pow(10.0, double(j % 4) - 2.0);
+    if (trial == 1) X.col(7) = 3.0 * X.col(2) + X.col(11);
+    const VectorXd y = X * gaussian(p, rng) + 1e-3 * gaussian(n, rng);
+    VectorXd d(p);
+    for (Index j = 0; j < p; ++j) d(j) = X.col(j).norm();
+    const MatrixXd S = X * d.cwiseInverse().asDiagonal();
+    const kincal::identify::detail::DescentStep step(X, y);
+    EXPECT_EQ(step.normal_equations(), trial == 0);
+    // Undamped: the minimum-norm least squares of S, mapped back by D⁻¹.
+    Eigen::JacobiSVD<MatrixXd> svd(S, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    svd.setThreshold(1e-10);
+    const VectorXd want = svd.solve(y).cwiseQuotient(d);
+    EXPECT_LT((step.solve(0.0) - want).norm(), 1e-8 * want.norm()) << "trial " << trial;
+    for (const double lambda : {1e-3, 1e-1, 10.0}) {
+      MatrixXd A = MatrixXd::Zero(n + p, p);
+      A.topRows(n) = S;
+      A.bottomRows(p) = std::sqrt(lambda) * MatrixXd::Identity(p, p);
+      VectorXd b = VectorXd::Zero(n + p);
+      b.head(n) = y;
+      const VectorXd damped = A.colPivHouseholderQr().solve(b).cwiseQuotient(d);
+      EXPECT_LT((step.solve(lambda) - damped).norm(), 1e-10 * damped.norm()) << "trial " << trial << ", λ " << lambda;
+    }
+  }
+}
