@@ -610,13 +610,24 @@ TEST(identifyEstimators, ShareInSpanMatchesTheProjectionOnAnIndependentSvd) {
     ASSERT_EQ(rank, trial == 0 ? p : p - 1);
     const MatrixXd U = svd.matrixU().leftCols(rank);
     const kincal::identify::detail::AppendedColumnsLeastSquares ls(X);
-    for (const double inside : {0.0, 0.3, 0.9, 0.999, 1.0}) {
+    const std::vector<double> inside = {0.0, 0.3, 0.9, 0.999, 1.0};
+    MatrixXd G(n, Index(inside.size()) + 1);
+    for (std::size_t c = 0; c < inside.size(); ++c) {
       const VectorXd a = X * gaussian(p, rng), b = gaussian(n, rng);
-      const VectorXd g = inside * a / a.norm() + (1.0 - inside) * b / b.norm();
-      const double want = (U.transpose() * g).squaredNorm() / g.squaredNorm();
-      EXPECT_NEAR(ls.share_in_span(g), want, 1e-10) << "trial " << trial << ", inside " << inside;
+      G.col(Index(c)) = inside[c] * a / a.norm() + (1.0 - inside[c]) * b / b.norm();
     }
-    EXPECT_EQ(ls.share_in_span(VectorXd::Zero(n)), 0.0);
+    G.col(G.cols() - 1).setZero();
+    // As the diagnosis reads them (from its candidate's solve) and alone.
+    Index rank_with_g = 0;
+    VectorXd from_solve;
+    ls.solve(G.leftCols(G.cols() - 1), gaussian(n, rng), rank_with_g, &from_solve);
+    const VectorXd alone = ls.shares_in_span(G);
+    for (Index c = 0; c + 1 < G.cols(); ++c) {
+      const double want = (U.transpose() * G.col(c)).squaredNorm() / G.col(c).squaredNorm();
+      EXPECT_NEAR(alone(c), want, 1e-10) << "trial " << trial << ", inside " << inside[std::size_t(c)];
+      EXPECT_NEAR(from_solve(c), want, 1e-10) << "trial " << trial << ", inside " << inside[std::size_t(c)];
+    }
+    EXPECT_EQ(alone(G.cols() - 1), 0.0);
   }
 }
 

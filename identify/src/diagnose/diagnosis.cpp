@@ -547,7 +547,8 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
     std::vector<std::string> with = accepted;
     with.push_back(e->name());
     Index rank = 0;
-    const VectorXd coef = with_candidate.solve(cal.G.at(e->name()), cal.y, rank);
+    VectorXd shares;
+    const VectorXd coef = with_candidate.solve(cal.G.at(e->name()), cal.y, rank, &shares);
     const FitResult f = fit_result(cal, test, with, coef, rank);
     const double df1 = double(f.rank - current.rank), df2 = double(n_cal - f.rank);
     t.cp = f.rss / cp_variance + 2.0 * double(f.rank);
@@ -562,7 +563,7 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
       int counted = 0;
       for (Index j = 0; j < G.cols(); ++j) {
         if (!(G.col(j).squaredNorm() > 0)) continue;
-        sum += std::min(1.0, with_candidate.share_in_span(G.col(j)));
+        sum += std::min(1.0, shares(j));
         ++counted;
       }
       t.confounded = counted > 0 ? sum / counted : 1.0;

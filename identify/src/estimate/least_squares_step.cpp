@@ -43,26 +43,33 @@ AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X
   }
 }
 
-double AppendedColumnsLeastSquares::share_in_span(const VectorXd& g) const {
-  const double g2 = g.squaredNorm();
+double AppendedColumnsLeastSquares::share_of(const VectorXd& QtG_top, double g2) const {
   if (!(g2 > 0)) return 0.0;
-  const Index n = X0_.rows(), p0 = X0_.cols();
-  if (p0 == 0) return 0.0;
-  if (n < p0) {  // wider than tall: no triangular R0 to read the span off
-    const VectorXd inside = X0_ * ScaledLeastSquares(X0_).solve(g);
-    return inside.squaredNorm() / g2;
-  }
-  VectorXd v = (qr0_.householderQ().adjoint() * g).head(p0);  // g in Q's first p0 directions
-  if (rank0_ < p0) {
-    v = r0_.householderQ().adjoint() * v;  // … and in range(R0)'s basis
-    return v.head(rank0_).squaredNorm() / g2;
-  }
-  return v.squaredNorm() / g2;
+  if (rank0_ < QtG_top.size())  // … and in range(R0)'s basis
+    return (r0_.householderQ().adjoint() * QtG_top).head(rank0_).squaredNorm() / g2;
+  return QtG_top.squaredNorm() / g2;
 }
 
-VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y, Index& rank) const {
+VectorXd AppendedColumnsLeastSquares::shares_in_span(const MatrixXd& G) const {
+  const Index n = X0_.rows(), p0 = X0_.cols(), k = G.cols();
+  VectorXd shares = VectorXd::Zero(k);
+  if (p0 == 0) return shares;
+  if (n < p0) {  // wider than tall: no triangular R0 to read the span off
+    const ScaledLeastSquares ls(X0_);
+    for (Index j = 0; j < k; ++j)
+      if (G.col(j).squaredNorm() > 0)
+        shares(j) = (X0_ * ls.solve(G.col(j))).squaredNorm() / G.col(j).squaredNorm();
+    return shares;
+  }
+  const MatrixXd QtG = qr0_.householderQ().adjoint() * G;  // G in Q's directions, all columns at once
+  for (Index j = 0; j < k; ++j) shares(j) = share_of(QtG.col(j).head(p0), G.col(j).squaredNorm());
+  return shares;
+}
+
+VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y, Index& rank, VectorXd* shares) const {
   const Index n = X0_.rows(), p0 = X0_.cols(), k = G.cols();
   if (n < 2 * (p0 + k)) {
+    if (shares != nullptr) *shares = shares_in_span(G);
     MatrixXd X(n, p0 + k);
     X << X0_, G;
     const ScaledLeastSquares ls(X);
@@ -70,8 +77,18 @@ VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y
     return ls.solve(y);
   }
   const VectorXd scale_g = column_scale(G);
-  const MatrixXd QtG = qr0_.householderQ().adjoint() * (G * scale_g.cwiseInverse().asDiagonal());
-  const VectorXd Qty = qr0_.householderQ().adjoint() * y;
+  // Qᵀ applied to the scaled G and to y in one pass (its block reflector
+  // formed once).
+  MatrixXd Gy(n, k + 1);
+  Gy.leftCols(k) = G * scale_g.cwiseInverse().asDiagonal();
+  Gy.col(k) = y;
+  const MatrixXd QtGy = qr0_.householderQ().adjoint() * Gy;
+  const auto QtG = QtGy.leftCols(k);
+  const auto Qty = QtGy.col(k);
+  if (shares != nullptr) {
+    shares->resize(k);
+    for (Index j = 0; j < k; ++j) (*shares)(j) = share_of(QtG.col(j).head(p0), Gy.col(j).squaredNorm());
+  }
   const Eigen::HouseholderQR<MatrixXd> qr2(QtG.bottomRows(n - p0));
   const VectorXd Q2ty = qr2.householderQ().adjoint() * Qty.tail(n - p0);
   MatrixXd C = MatrixXd::Zero(p0 + k, p0 + k);

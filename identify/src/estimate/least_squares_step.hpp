@@ -41,15 +41,17 @@ class ScaledLeastSquares {
 class AppendedColumnsLeastSquares {
  public:
   explicit AppendedColumnsLeastSquares(const Eigen::MatrixXd& X0);
-  // The minimum-norm δ (X0's coefficients first) and the rank of [X0, G].
-  Eigen::VectorXd solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& y, Eigen::Index& rank) const;
-  // ‖P·g‖² / ‖g‖² (0 for g = 0), P the orthogonal projector on the span of
-  // X0 at ScaledLeastSquares(X0)'s rank: the share of g the design already
-  // explains (the diagnosis's "confounded"). From the same QR: the span of
-  // X0 is Q·range(R0), and range(R0) is read off a rank-revealing
-  // decomposition of the p0-square R0 (its pivots are those of X0·D0⁻¹:
-  // an orthogonal transform keeps the column norms).
-  double share_in_span(const Eigen::VectorXd& g) const;
+  // The minimum-norm δ (X0's coefficients first) and the rank of [X0, G];
+  // in `shares` (if given) shares_in_span(G), from the same Qᵀ·G.
+  Eigen::VectorXd solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& y, Eigen::Index& rank,
+                        Eigen::VectorXd* shares = nullptr) const;
+  // Per column g of G: ‖P·g‖² / ‖g‖² (0 for g = 0), P the orthogonal
+  // projector on the span of X0 at ScaledLeastSquares(X0)'s rank — the share
+  // of g the design already explains (the diagnosis's "confounded"). From
+  // the same QR: the span of X0 is Q·range(R0), and range(R0) is read off a
+  // rank-revealing decomposition of the p0-square R0 (its pivots are those
+  // of X0·D0⁻¹: an orthogonal transform keeps the column norms).
+  Eigen::VectorXd shares_in_span(const Eigen::MatrixXd& G) const;
 
  private:
   Eigen::MatrixXd X0_;
@@ -59,6 +61,9 @@ class AppendedColumnsLeastSquares {
   // rank-deficient and the share is taken on its first rank0_ directions.
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> r0_;
   Eigen::Index rank0_ = 0;
+  // The share of a column g = Q·[t; b] given t (its first p0 coordinates)
+  // and ‖g‖².
+  double share_of(const Eigen::VectorXd& QtG_top, double g2) const;
 };
 
 // ScaledLeastSquares(X).solve(y): the one solve of every Gauss–Newton step
