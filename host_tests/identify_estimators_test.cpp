@@ -590,19 +590,27 @@ TEST(identifyEstimators, PartialRidgeGcvMatchesTheAugmentedSolve) {
   }
 }
 
+// Columns in units 1e-2 … 1e1 apart (mm against rad-like parameters): what
+// the column scaling of the host's least squares is for.
+namespace {
+MatrixXd columns_in_units_apart(MatrixXd X) {
+  for (Index j = 0; j < X.cols(); ++j) X.col(j) *= std::pow(10.0, double(j % 4) - 2.0);
+  return X;
+}
+}  // namespace
+
 // The diagnosis's "confounded" share of a candidate column, read off the QR
 // its fit appends columns to (AppendedColumnsLeastSquares::share_in_span),
 // against the projection on the left singular vectors of an independent SVD
 // of the whole design (BDCSVD of X itself, not of a triangular factor): full
-// rank with columns of very different scales (mm against rad-like 1e-4), and
+// rank with columns in units 1e-2 … 1e1 apart, and
 // rank-deficient with one column an exact combination of two others, where
 // Q spans a direction X does not.
 TEST(identifyEstimators, ShareInSpanMatchesTheProjectionOnAnIndependentSvd) {
   std::mt19937_64 rng(41);
   for (int trial = 0; trial < 2; ++trial) {
     const Index n = 90, p = 12;
-    MatrixXd X = design_with_spectrum(n, p, 1.0, 1e4, rng);
-    for (Index j = 0; j < p; ++j) X.col(j) *= std::pow(10.0, double(j % 4) - 2.0);
+    MatrixXd X = columns_in_units_apart(design_with_spectrum(n, p, 1.0, 1e4, rng));
     if (trial == 1) X.col(5) = 2.0 * X.col(1) - 0.3 * X.col(8);
     const Eigen::BDCSVD<MatrixXd> svd(X, Eigen::ComputeThinU);
     Index rank = 0;
@@ -642,8 +650,7 @@ TEST(identifyEstimators, DescentStepsMatchAnIndependentSolveOfEachProblem) {
   std::mt19937_64 rng(43);
   for (int trial = 0; trial < 2; ++trial) {
     const Index n = 300, p = 20;
-    MatrixXd X = design_with_spectrum(n, p, 1.0, 1e5, rng);
-    for (Index j = 0; j < p; ++j) X.col(j) *= std::pow(10.0, double(j % 4) - 2.0);
+    MatrixXd X = columns_in_units_apart(design_with_spectrum(n, p, 1.0, 1e5, rng));
     if (trial == 1) X.col(7) = 3.0 * X.col(2) + X.col(11);
     const VectorXd y = X * gaussian(p, rng) + 1e-3 * gaussian(n, rng);
     VectorXd d(p);
