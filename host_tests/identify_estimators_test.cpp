@@ -674,3 +674,56 @@ TEST(identifyEstimators, DescentStepsMatchAnIndependentSolveOfEachProblem) {
     }
   }
 }
+
+// PreparedDesign with the SVD deferred (Options::defer_svd, what an
+// iteration of the 6-UPS fit and the outlier screens use) against the same
+// design prepared in full: the OLS solution from R alone, the deleted-node
+// statistics from Q's thin factor instead of U, then after complete_svd()
+// the estimate itself. Columns in units 1e-2 … 1e1 apart, weighted rows, a
+// 40σ blunder on one node. Every SVD-only method refuses before
+// complete_svd(); a design whose column norms span more than 1/ε is never
+// deferred (its unscaled spectrum is what the guard reads).
+TEST(identifyEstimators, DeferredSvdGivesTheSameOlsAndOutlierStatistics) {
+  std::mt19937_64 rng(47);
+  const MatrixXd H = columns_in_units_apart(gaussian(150, 7, rng));
+  LinearProblem p = node_problem(rng, gaussian(7, rng), 0.01, H);
+  std::uniform_real_distribution<double> w(0.5, 4.0);
+  p.weights = VectorXd(p.H.rows());
+  for (Index i = 0; i < p.H.rows(); ++i) (*p.weights)(i) = w(rng);
+  p.y(3 * 21 + 2) += 40 * 0.01;  // node 121
+  const PreparedDesign full(p);
+  PreparedDesign::Options o;
+  o.defer_svd = true;
+  PreparedDesign deferred(p, o);
+  ASSERT_FALSE(deferred.svd_complete());
+  EXPECT_EQ(deferred.rank(), full.rank());
+  EXPECT_EQ(deferred.scaled_condition_number(), full.scaled_condition_number());
+  EXPECT_THROW(deferred.V(), std::logic_error);
+  EXPECT_THROW(deferred.condition_number(), std::logic_error);
+  EXPECT_THROW(estimate(deferred, p, {}), std::logic_error);
+
+  FitWorkspace ws;
+  VectorXd x;
+  full.ols(p.y, x, ws);
+  EXPECT_LT((deferred.ols_solution(p.y) - x).norm(), 1e-10 * x.norm());
+  const OutlierReport a = detect_outliers(full, p), b = detect_outliers(deferred, p);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(a.outlying_nodes, b.outlying_nodes);
+  ASSERT_EQ(b.outlying_nodes, std::vector<Index>{121});
+  for (std::size_t k = 0; k < a.nodes.size(); ++k) {
+    EXPECT_NEAR(b.nodes[k].f, a.nodes[k].f, 1e-9 * a.nodes[k].f) << "node " << a.nodes[k].node;
+    EXPECT_NEAR(b.nodes[k].p_value, a.nodes[k].p_value, 1e-9 * a.nodes[k].p_value + 1e-300) << "node " << a.nodes[k].node;
+  }
+  deferred.complete_svd();
+  const Estimate e_full = estimate(full, p, {}), e_deferred = estimate(deferred, p, {});
+  EXPECT_EQ(e_deferred.x, e_full.x);
+  EXPECT_EQ(e_deferred.standard_error, e_full.standard_error);
+
+  LinearProblem badly_scaled = p;
+  badly_scaled.H.col(3) *= 1e-17;
+  PreparedDesign::Options lenient = o;
+  lenient.require_full_rank = false;
+  const PreparedDesign guarded(badly_scaled, lenient);
+  EXPECT_TRUE(guarded.svd_complete());
+  EXPECT_NE(guarded.deficiency().find("too badly scaled"), std::string::npos);
+}

@@ -328,15 +328,28 @@ PreparedDesign::PreparedDesign(const LinearProblem& problem, Options options) {
   // costs 4nm flops, where forming Q·U_R would cost 4nm².
   RankReport rr;
   rows_ = n;
+  cols_ = m;
   tall_ = n > m;
   if (tall_) {
     qr_.compute(Hw);
     const MatrixXd R = qr_.matrixQR().topRows(m).triangularView<Eigen::Upper>();
     rr = rank_of_factor(R, n, options.rcond, ColumnScaling::UnitNorm);
-    const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    U_ = svd.matrixU();
-    V_ = svd.matrixV();
-    s_ = svd.singularValues();
+    // Deferred only where the guard below cannot fire: full scaled rank, and
+    // s_min(R) ≥ s_min(R·D⁻¹)·min D above its floor with s_max(R) ≤
+    // s_max(R·D⁻¹)·max D.
+    bool defer = options.defer_svd && !options.explicit_u && m > 0 && rr.rank == m;
+    if (defer) {
+      const double low = rr.singular_values(m - 1) * rr.column_scale.minCoeff();
+      const double high = rr.singular_values(0) * rr.column_scale.maxCoeff();
+      defer = low > static_cast<double>(n) * std::numeric_limits<double>::epsilon() * high;
+    }
+    svd_done_ = false;
+    if (defer) {
+      rank_ = m;
+      scaled_condition_number_ = rr.condition_number;
+      return;
+    }
+    complete_svd();
     if (options.explicit_u) U_full_ = U();
   } else {  // as many rows as columns or fewer: rank-deficient or square, small
     rr = rank_by_svd(Hw, options.rcond, ColumnScaling::UnitNorm);
@@ -373,7 +386,18 @@ PreparedDesign::PreparedDesign(const LinearProblem& problem, Options options) {
   if (options.require_full_rank && !deficiency_.empty()) throw InputError(deficiency_);
 }
 
+void PreparedDesign::complete_svd() {
+  if (svd_done_) return;
+  const MatrixXd R = qr_.matrixQR().topRows(cols_).triangularView<Eigen::Upper>();
+  const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  U_ = svd.matrixU();
+  V_ = svd.matrixV();
+  s_ = svd.singularValues();
+  svd_done_ = true;
+}
+
 double PreparedDesign::condition_number() const {
+  require_svd();
   if (rank_ == 0) return std::numeric_limits<double>::infinity();
   return s_(0) / s_(rank_ - 1);
 }
@@ -382,7 +406,50 @@ void PreparedDesign::require_full_rank() const {
   if (!deficiency_.empty()) throw InputError(deficiency_);
 }
 
+void PreparedDesign::require_svd() const {
+  if (!svd_done_) throw std::logic_error("PreparedDesign: the SVD was deferred (Options::defer_svd): complete_svd() first");
+}
+
+Eigen::VectorXd PreparedDesign::ols_solution(const Eigen::VectorXd& y) const {
+  require_full_rank();
+  if (y.size() != rows()) {
+    throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
+  }
+  if (!tall_) {
+    FitWorkspace ws;
+    VectorXd x;
+    ols(y, x, ws);
+    return x;
+  }
+  VectorXd z = sqrt_w_.size() > 0 ? VectorXd(sqrt_w_.cwiseProduct(y)) : y;
+  z.applyOnTheLeft(qr_.householderQ().transpose());
+  return qr_.matrixQR().topRows(cols_).triangularView<Eigen::Upper>().solve(z.head(cols_));
+}
+
+double PreparedDesign::ols_residual(const Eigen::VectorXd& y, Eigen::VectorXd& r_w, Eigen::MatrixXd& basis) const {
+  if (svd_done_) {
+    FitWorkspace ws;
+    VectorXd x;
+    const FitInfo info = ols(y, x, ws);
+    basis = U().leftCols(rank_);
+    r_w = ws.yw - basis * ws.c;
+    return info.rss;
+  }
+  // Deferred: a tall design of full rank, whose Q's thin factor spans the
+  // column space (Q₁Q₁ᵀ = U·Uᵀ).
+  require_full_rank();
+  if (y.size() != rows()) {
+    throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
+  }
+  basis = MatrixXd::Identity(rows_, cols_);
+  basis.applyOnTheLeft(qr_.householderQ());
+  const VectorXd yw = sqrt_w_.size() > 0 ? VectorXd(sqrt_w_.cwiseProduct(y)) : y;
+  r_w = yw - basis * (basis.transpose() * yw);
+  return r_w.squaredNorm();
+}
+
 double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const {
+  require_svd();
   if (y.size() != rows()) {
     throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
   }
@@ -413,6 +480,7 @@ double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const
 }
 
 Eigen::MatrixXd PreparedDesign::U() const {
+  require_svd();
   if (!tall_) return U_;
   if (U_full_.size() > 0) return U_full_;
   MatrixXd U = MatrixXd::Zero(rows_, cols());
@@ -501,6 +569,7 @@ FitInfo PreparedDesign::pcr(const Eigen::VectorXd& y, Eigen::VectorXd& x, FitWor
 
 Eigen::Index PreparedDesign::pcr_components(const PcrOptions& o) const {
   if (o.components > 0) return o.components;
+  require_svd();
   if (o.variance_fraction > 0) {
     if (!(o.variance_fraction <= 1.0)) throw InputError("PCR: variance fraction " + fmt(o.variance_fraction) + " > 1");
     const double total = s_.head(rank_).squaredNorm();
@@ -518,6 +587,7 @@ Eigen::Index PreparedDesign::pcr_components(const PcrOptions& o) const {
 }
 
 Eigen::VectorXd PreparedDesign::standard_errors(const Eigen::VectorXd& filter, double sigma2) const {
+  require_svd();
   const VectorXd g = filter.head(rank_).cwiseQuotient(s_.head(rank_)).cwiseAbs2();  // f_j² / s_j²
   VectorXd var = V_.leftCols(rank_).cwiseAbs2() * g;
   return (sigma2 * var).cwiseSqrt();
@@ -851,23 +921,23 @@ double f_distribution_upper_tail(double f, double d1, double d2) {
 
 OutlierReport detect_outliers(const LinearProblem& problem, const OutlierOptions& options, double rcond) {
   validate(problem);
-  return detect_outliers(PreparedDesign(problem, {rcond, true}), problem, options);
+  PreparedDesign::Options o;
+  o.rcond = rcond;
+  o.defer_svd = true;  // the statistics need only the QR (full rank) and never the SVD
+  return detect_outliers(PreparedDesign(problem, o), problem, options);
 }
 
 OutlierReport detect_outliers(const PreparedDesign& design, const LinearProblem& problem,
                               const OutlierOptions& options) {
   validate(problem);
   if (!(options.alpha > 0 && options.alpha < 1)) throw InputError("outliers: alpha " + fmt(options.alpha) + " not in (0, 1)");
-  FitWorkspace ws;
-  VectorXd x;
-  const FitInfo info = design.ols(problem.y, x, ws);
   const Index n = design.rows(), m = design.rank();
-  // Leverages and residuals from the design's factorisation: U (formed once
-  // here) and r = y_w − U_r·c, the whitened OLS residuals.
-  const MatrixXd U_all = design.U();
-  const auto U = U_all.leftCols(m);
-  const VectorXd r = ws.yw - U * ws.c;
-  const double rss = info.rss;
+  // Leverages and residuals from the design's factorisation: an orthonormal
+  // basis U of its column space (formed once here; Q's thin factor where
+  // the SVD is deferred) and r = y_w − U·Uᵀ·y_w, the whitened OLS residuals.
+  VectorXd r;
+  MatrixXd U;
+  const double rss = design.ols_residual(problem.y, r, U);
   const double nu = static_cast<double>(n - m);
   constexpr double kLeverageOne = 1e-10;  // 1 − h below this: the row alone fixes a direction
 

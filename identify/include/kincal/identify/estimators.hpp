@@ -260,21 +260,45 @@ class PreparedDesign {
     // the hybrid's 882 × 48 fine design). Pays beyond a few hundred solves on
     // one design: Monte Carlo studies.
     bool explicit_u = false;
+    // Leave the SVD of R to complete_svd() where nothing in the constructor
+    // needs it (a tall design of full rank whose unscaled spectrum is
+    // bounded away from rounding by the scaled one's): the rank, the scaled
+    // condition number, ols_solution() and the outlier statistics
+    // (detect_outliers) come from the QR alone. For an iteration that only
+    // steps: the SVD of a 42 × 42 R is 4 M instructions (#13). Every other
+    // method needs complete_svd() first (std::logic_error otherwise).
+    bool defer_svd = false;
   };
   // Uses problem.H, weights and names (problem.y is not needed and may be empty).
   explicit PreparedDesign(const LinearProblem& problem, Options options);
   explicit PreparedDesign(const LinearProblem& problem) : PreparedDesign(problem, Options{}) {}
 
   Eigen::Index rows() const { return rows_; }
-  Eigen::Index cols() const { return V_.rows(); }
+  Eigen::Index cols() const { return cols_; }
   Eigen::Index rank() const { return rank_; }
   bool full_rank() const { return rank_ == cols(); }
+  // Whether the SVD of R is there (Options::defer_svd), and computing it.
+  bool svd_complete() const { return svd_done_; }
+  void complete_svd();
   // The n × m thin left singular vectors, formed on request (the estimators
   // never need them: Q stays implicit, see the constructor).
   Eigen::MatrixXd U() const;
-  const Eigen::MatrixXd& V() const { return V_; }  // m × m
-  const Eigen::VectorXd& singular_values() const { return s_; }  // of the whitened, unscaled H
+  const Eigen::MatrixXd& V() const {  // m × m
+    require_svd();
+    return V_;
+  }
+  const Eigen::VectorXd& singular_values() const {  // of the whitened, unscaled H
+    require_svd();
+    return s_;
+  }
   double condition_number() const;
+  // The OLS solution from the QR alone, R⁻¹·(Qᵀ·y_w)_top (tall, full-rank
+  // designs; ols()'s x to rounding): what an iteration steps by.
+  Eigen::VectorXd ols_solution(const Eigen::VectorXd& y) const;
+  // The whitened OLS residual r_w, an orthonormal basis of the design's
+  // column space (n × rank: U's leading columns, or with the SVD deferred
+  // Q's thin factor, the same projector) and the RSS: the outlier statistics.
+  double ols_residual(const Eigen::VectorXd& y, Eigen::VectorXd& r_w, Eigen::MatrixXd& basis) const;
   // s_max / s_min of the whitened design on unit-norm columns (inf when
   // rank-deficient): rank_by_svd's condition number, from the same
   // factorisation.
@@ -310,13 +334,15 @@ class PreparedDesign {
   double project(const Eigen::VectorXd& y, FitWorkspace& ws) const;
   FitInfo finish(FitWorkspace& ws, Eigen::VectorXd& x, double rss_ols) const;
   void require_full_rank() const;
+  void require_svd() const;
 
   // Tall design (n > m): Hw = Q·R by Householder QR, R = U_R·S·Vᵀ; qr_
   // holds Q's reflectors and U_ is U_R (m × m); U_full_ is Q·U_R when
   // Options::explicit_u asked for it (else empty). Otherwise U_ is the thin U.
   Eigen::HouseholderQR<Eigen::MatrixXd> qr_;
   bool tall_ = false;
-  Eigen::Index rows_ = 0;
+  bool svd_done_ = true;
+  Eigen::Index rows_ = 0, cols_ = 0;
   Eigen::MatrixXd U_, V_, U_full_;
   Eigen::VectorXd s_;
   Eigen::VectorXd sqrt_w_;  // empty: unweighted
