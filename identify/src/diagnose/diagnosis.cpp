@@ -58,7 +58,6 @@ using detail::NodeData;
 // ---- linear algebra ----------------------------------------------------------
 
 // The nested fits' least squares: least_squares_step.hpp.
-using LeastSquares = detail::ScaledLeastSquares;
 
 double rms_of(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm() / double(v.size())) : 0.0; }
 
@@ -109,9 +108,16 @@ FitResult fit_result(const Stack& cal, const Stack& test, const std::vector<std:
   return f;
 }
 
-FitResult fit(const Stack& cal, const Stack& test, const std::vector<std::string>& effects) {
-  const LeastSquares ls(design(cal, effects));
-  return fit_result(cal, test, effects, ls.solve(cal.y), ls.rank());
+// The current model's design (base and accepted effects on the cal rows),
+// factorised once: its own fit (fit_on) and the QR the next candidates
+// append their columns to (test_candidates). #13: each was a factorisation
+// of its own, three 882 × 48 decompositions of the hybrid's diagnosis.
+using CurrentDesign = detail::AppendedColumnsLeastSquares;
+
+FitResult fit_on(const CurrentDesign& ls, const Stack& cal, const Stack& test, const std::vector<std::string>& effects) {
+  Index rank = 0;
+  VectorXd coef = ls.solve(MatrixXd(cal.y.size(), 0), cal.y, rank);
+  return fit_result(cal, test, effects, std::move(coef), rank);
 }
 
 // Upper tail of χ²_ν / ν as F(ν, ∞) (the F routine's incomplete beta).
@@ -336,7 +342,7 @@ class DiagnosisRun {
   bool consistent_rms(double rss, Index rank, double test_ss, Index test_n) const;
   bool consistent(const FitResult& f) const { return consistent_rms(f.rss, f.rank, f.r_test.squaredNorm(), f.r_test.size()); }
   double required_gain(const FitResult& f) const;
-  std::vector<EffectTest> test_candidates(int step) const;
+  std::vector<EffectTest> test_candidates(int step, std::map<std::string, FitResult>& fits) const;
   void stepwise_search();
   void relinearise(const std::string& accepted_effect);
   void rank_candidates();
@@ -362,6 +368,8 @@ class DiagnosisRun {
   std::unique_ptr<detail::SteppedBaseFit> stepped_base;
   double orientation_factor = 1.0;
   Stack cal, test;
+  // design(cal, accepted) factorised: `current`'s fit and the candidates' QR.
+  std::unique_ptr<const CurrentDesign> current_design;
   std::vector<const Effect*> candidates;
   Index n_cal = 0;
   FitResult base_fit;
@@ -490,7 +498,8 @@ void DiagnosisRun::stack_candidates() {
 }
 
 void DiagnosisRun::fit_base_columns() {
-  base_fit = fit(cal, test, {});
+  current_design = std::make_unique<const CurrentDesign>(design(cal, {}));
+  base_fit = fit_on(*current_design, cal, test, {});
   d.rms = base_fit.rms;
   sigma_mm = d.noise_um / kMicro;
   noise_known = sigma_mm > 0;
@@ -530,13 +539,13 @@ double DiagnosisRun::required_gain(const FitResult& f) const {
 
 // Each candidate not yet accepted, fitted with the accepted ones: its F test
 // against the current model, Cp, confounding and held-out gain.
-std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
+std::vector<EffectTest> DiagnosisRun::test_candidates(int step, std::map<std::string, FitResult>& fits) const {
   const double cp_variance =
       noise_known ? sigma_mm * sigma_mm : current.rss / double(std::max<Index>(1, n_cal - current.rank));
-  // The current model's design, factorised once per step (it was twice per
+  // The current model's design, factorised once (it was twice per
   // candidate, then twice per step): the QR that each candidate's fit appends
   // its columns to, and that gives each candidate's share inside its span.
-  const detail::AppendedColumnsLeastSquares with_candidate(design(cal, accepted));
+  const CurrentDesign& with_candidate = *current_design;
   std::vector<EffectTest> tests;
   for (const Effect* e : candidates) {
     if (std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end()) continue;
@@ -570,6 +579,7 @@ std::vector<EffectTest> DiagnosisRun::test_candidates(int step) const {
     }
     t.rms_after = f.rms;
     if (current.rms.test > 0 && f.r_test.size() > 0) t.test_gain = 1.0 - f.rms.test / current.rms.test;
+    fits[t.effect] = f;
     tests.push_back(t);
   }
   return tests;
@@ -595,7 +605,8 @@ void DiagnosisRun::stepwise_search() {
   for (int step = 1; step <= int(candidates.size()); ++step) {
     progress("step " + std::to_string(step) + ": testing " + std::to_string(candidates.size() - accepted.size()) +
              " candidate effects");
-    std::vector<EffectTest> tests = test_candidates(step);
+    std::map<std::string, FitResult> fits;  // each candidate's fit with the accepted ones
+    std::vector<EffectTest> tests = test_candidates(step, fits);
     adjust_by_holm(tests);
     // Of the effects that qualify (significant, and helping the held-out
     // rows), the one of lowest Mallows' Cp: the model that fits the data best
@@ -619,8 +630,12 @@ void DiagnosisRun::stepwise_search() {
     if (best == nullptr) break;
     latest[best->effect].accepted = true;
     accepted.push_back(best->effect);
-    current = fit(cal, test, accepted);
+    // The accepted candidate's own fit; its design is factorised where the
+    // next step needs it (re-linearising usually moves the base first).
+    current = std::move(fits.at(best->effect));
+    current_design.reset();
     if (options.relinearise) relinearise(best->effect);
+    if (!current_design) current_design = std::make_unique<const CurrentDesign>(design(cal, accepted));
     std::vector<std::string> model = {"base"};
     model.insert(model.end(), accepted.begin(), accepted.end());
     d.steps.push_back({model, current.rms});
@@ -663,12 +678,14 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
       cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false);
       test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true);
     }
-    const FitResult moved_fit = fit(cal2, test2, accepted);
+    auto moved_design = std::make_unique<const CurrentDesign>(design(cal2, accepted));
+    const FitResult moved_fit = fit_on(*moved_design, cal2, test2, accepted);
     if (moved_fit.rss < current.rss) {
       base = std::move(moved);
       cal = std::move(cal2);
       test = std::move(test2);
       current = moved_fit;
+      current_design = std::move(moved_design);
       for (const std::string& a : accepted) effect_start[a] = m.effects.values.at(a);
     }
   }

@@ -89,14 +89,17 @@ VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y
     shares->resize(k);
     for (Index j = 0; j < k; ++j) (*shares)(j) = share_of(QtG.col(j).head(p0), Gy.col(j).squaredNorm());
   }
-  const Eigen::HouseholderQR<MatrixXd> qr2(QtG.bottomRows(n - p0));
-  const VectorXd Q2ty = qr2.householderQ().adjoint() * Qty.tail(n - p0);
   MatrixXd C = MatrixXd::Zero(p0 + k, p0 + k);
   C.topLeftCorner(p0, p0) = qr0_.matrixQR().topRows(p0).triangularView<Eigen::Upper>();
-  C.topRightCorner(p0, k) = QtG.topRows(p0);
-  C.bottomRightCorner(k, k) = qr2.matrixQR().topRows(k).triangularView<Eigen::Upper>();
   VectorXd rhs(p0 + k);
-  rhs << Qty.head(p0), Q2ty.head(k);
+  rhs.head(p0) = Qty.head(p0);
+  if (k > 0) {  // no columns appended: the current design's own fit
+    const Eigen::HouseholderQR<MatrixXd> qr2(QtG.bottomRows(n - p0));
+    const VectorXd Q2ty = qr2.householderQ().adjoint() * Qty.tail(n - p0);
+    C.topRightCorner(p0, k) = QtG.topRows(p0);
+    C.bottomRightCorner(k, k) = qr2.matrixQR().topRows(k).triangularView<Eigen::Upper>();
+    rhs.tail(k) = Q2ty.head(k);
+  }
   Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
   cod.setThreshold(kRankThreshold);
   cod.compute(C);
