@@ -57,7 +57,7 @@ using detail::NodeData;
 
 // ---- linear algebra ----------------------------------------------------------
 
-// The nested fits' least squares: least_squares_step.hpp.
+// The nested fits' least squares: least_squares_step.hpp (CurrentDesign below).
 
 double rms_of(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm() / double(v.size())) : 0.0; }
 

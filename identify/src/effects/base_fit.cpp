@@ -93,6 +93,14 @@ void append_penalty_rows(const SteppedBaseFit& fit, MatrixXd& X, VectorXd& y) {
   y.tail(p) = -std::sqrt(penalty) * fit.away();
 }
 
+void complete_at_solution(const SteppedBaseFit& fit, const PoseTable& data, bool ends_linearised,
+                          bool has_joint_maps, BaseModel& base) {
+  if (!ends_linearised)
+    base = fit.evaluate(data, true);
+  else if (!has_joint_maps)
+    fit.add_joint_maps(data, base);
+}
+
 BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate) {
   BaseModel base;
   if (iterate) fit.start(data, false, true);
@@ -117,11 +125,7 @@ BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate)
         append_penalty_rows(fit, H, y);
       },
       [&](const VectorXd& delta) { fit.step(delta); });
-  // At the solution, with the joint maps the effect columns need.
-  if (count.ends_linearised)
-    fit.add_joint_maps(data, base);
-  else
-    base = fit.evaluate(data, true);
+  complete_at_solution(fit, data, count.ends_linearised, false, base);
   fit.finish(base, data.file, count.steps);
   return base;
 }

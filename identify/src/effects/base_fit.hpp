@@ -132,6 +132,14 @@ void stack(const BaseModel& base, bool test, Eigen::MatrixXd& H, Eigen::VectorXd
 // first fit.parameters() columns are the base's) and y; none when k = 0.
 void append_penalty_rows(const SteppedBaseFit& fit, Eigen::MatrixXd& X, Eigen::VectorXd& y);
 
+// `base` made the base at the iterate a descent ended on, with the joint
+// maps the effect columns need: `base` is the descent's last linearisation
+// (formed with the joint maps or not: `has_joint_maps`) where the descent
+// ended on that iterate (`ends_linearised`), and is evaluated afresh
+// otherwise (the last evaluation may belong to a step that was undone).
+void complete_at_solution(const SteppedBaseFit& fit, const PoseTable& data, bool ends_linearised,
+                          bool has_joint_maps, BaseModel& base);
+
 // Gauss–Newton (damped) of a stepped base fit alone to its minimum on
 // `data`, from the better of its current iterate and its fallback start
 // (`iterate`; else evaluated where it stands): the nodes at the solution with

@@ -260,12 +260,8 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
       });
   rep.passes += count.linearisations;
   // The base at the accepted iterate, with the joint maps a caller's effect
-  // columns need (the last evaluation may belong to a step that was undone;
-  // the last linearisation, if at this iterate, has the rest).
-  if (!count.ends_linearised)
-    base = fit.evaluate(corrected(), true);
-  else if (!joint_maps)
-    fit.add_joint_maps(corrected(), base);
+  // columns need.
+  detail::complete_at_solution(fit, corrected(), count.ends_linearised, joint_maps, base);
   fit.finish(base, data.file, rep.passes);
   return base;
 }

@@ -410,18 +410,22 @@ void PreparedDesign::require_svd() const {
   if (!svd_done_) throw std::logic_error("PreparedDesign: the SVD was deferred (Options::defer_svd): complete_svd() first");
 }
 
-Eigen::VectorXd PreparedDesign::ols_solution(const Eigen::VectorXd& y) const {
-  require_full_rank();
+Eigen::VectorXd PreparedDesign::whitened(const Eigen::VectorXd& y) const {
   if (y.size() != rows()) {
     throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
   }
+  return sqrt_w_.size() > 0 ? VectorXd(sqrt_w_.cwiseProduct(y)) : y;
+}
+
+Eigen::VectorXd PreparedDesign::ols_solution(const Eigen::VectorXd& y) const {
+  require_full_rank();
   if (!tall_) {
     FitWorkspace ws;
     VectorXd x;
     ols(y, x, ws);
     return x;
   }
-  VectorXd z = sqrt_w_.size() > 0 ? VectorXd(sqrt_w_.cwiseProduct(y)) : y;
+  VectorXd z = whitened(y);
   z.applyOnTheLeft(qr_.householderQ().transpose());
   return qr_.matrixQR().topRows(cols_).triangularView<Eigen::Upper>().solve(z.head(cols_));
 }
@@ -438,26 +442,16 @@ double PreparedDesign::ols_residual(const Eigen::VectorXd& y, Eigen::VectorXd& r
   // Deferred: a tall design of full rank, whose Q's thin factor spans the
   // column space (Q₁Q₁ᵀ = U·Uᵀ).
   require_full_rank();
-  if (y.size() != rows()) {
-    throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
-  }
+  const VectorXd yw = whitened(y);
   basis = MatrixXd::Identity(rows_, cols_);
   basis.applyOnTheLeft(qr_.householderQ());
-  const VectorXd yw = sqrt_w_.size() > 0 ? VectorXd(sqrt_w_.cwiseProduct(y)) : y;
   r_w = yw - basis * (basis.transpose() * yw);
   return r_w.squaredNorm();
 }
 
 double PreparedDesign::project(const Eigen::VectorXd& y, FitWorkspace& ws) const {
   require_svd();
-  if (y.size() != rows()) {
-    throw std::invalid_argument("PreparedDesign: y has " + idx(y.size()) + " entries for " + idx(rows()) + " rows");
-  }
-  if (sqrt_w_.size() > 0) {
-    ws.yw = sqrt_w_.cwiseProduct(y);
-  } else {
-    ws.yw = y;
-  }
+  ws.yw = whitened(y);
   ws.c.resize(rank_);
   if (!tall_ || U_full_.size() > 0) {
     const auto Ur = (tall_ ? U_full_ : U_).leftCols(rank_);

@@ -335,6 +335,8 @@ class PreparedDesign {
   FitInfo finish(FitWorkspace& ws, Eigen::VectorXd& x, double rss_ols) const;
   void require_full_rank() const;
   void require_svd() const;
+  // √w ∘ y (y itself when unweighted), y's length checked.
+  Eigen::VectorXd whitened(const Eigen::VectorXd& y) const;
 
   // Tall design (n > m): Hw = Q·R by Householder QR, R = U_R·S·Vᵀ; qr_
   // holds Q's reflectors and U_ is U_R (m × m); U_full_ is Q·U_R when
