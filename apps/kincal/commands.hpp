@@ -137,4 +137,14 @@ int run_identify_with_effects(const kincal::identify::Robot& robot, const std::s
                               const std::string& effects, const std::string& estimator, const std::string& json,
                               double effect_alpha, double ridge_k, bool keep_outliers, bool instrument_frame);
 
+// `kincal export linuxcnc` (export_command.cpp): the files a LinuxCNC
+// hexapod needs (identify/linuxcnc_export.hpp).
+struct ExportArgs {
+  std::string model, out, data, units = "mm", home_offsets;
+  double tolerance_um = 0.1;
+  bool force = false;
+};
+CLI::App* add_export_command(CLI::App& app, ExportArgs& args);
+int run_export(const ExportArgs& args);
+
 }  // namespace kincal_app

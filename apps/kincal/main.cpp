@@ -135,6 +135,9 @@ int run(int argc, char** argv) {
   kincal_app::PlanArgs plan_args;
   CLI::App* plan = kincal_app::add_plan_command(app, plan_args);
 
+  kincal_app::ExportArgs export_args;
+  CLI::App* export_linuxcnc = kincal_app::add_export_command(app, export_args);
+
   std::string table_model, table_out;
   CLI::App* table = app.add_subcommand(
       "table", "write a model's calibration table as a constexpr C++ header for the firmware (docs/firmware.md)");
@@ -147,7 +150,7 @@ int run(int argc, char** argv) {
     for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->get_name() == first;
     if (!known) {
       std::cerr << "kincal: unknown command '" << first
-                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table, effects, plan; run 'kincal --help')\n";
+                << "' (commands: simulate, robot, errors, identify, diagnose, compensate, table, effects, plan, export; run 'kincal --help')\n";
       return kExitUsage;
     }
   }
@@ -173,6 +176,7 @@ int run(int argc, char** argv) {
   if (*table) return run_table(table_model, table_out);
   if (*effects) return kincal_app::run_effects(effects_args);
   if (*plan) return kincal_app::run_plan(plan_args);
+  if (*export_linuxcnc) return kincal_app::run_export(export_args);
   return kExitUsage;
 }
 
