@@ -1042,3 +1042,50 @@ TEST(appKincal, OneTrackerTargetInItsOwnFrameThroughTheTool) {
 }
 
 }  // namespace
+
+namespace {
+
+// `kincal export linuxcnc` through the tool: a 6-UPS model from `identify`
+// (examples/firmware/model-stewart.json, committed) is exported with the
+// README's prediction on given data; a hybrid model is refused with one line;
+// an existing directory is refused without --force and replaced whole with it;
+// `export` alone names its subcommand. (What the files do inside LinuxCNC is
+// the linuxcnc stage of scripts/test-all.sh.)
+TEST(appKincal, ExportLinuxCncWritesTheFilesAndRefusesWhatItCannotServe) {
+  const std::string dir = kDir + "/export_linuxcnc";
+  fs::remove_all(dir);
+  const std::string model = kExamples + "/firmware/model-stewart.json";
+  const std::string poses = kExamples + "/seed001/poses.csv";
+  ToolRun r = run_tool("export linuxcnc --model \"" + model + "\" --data \"" + poses + "\" --out \"" + dir + "\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"kincal-geometry.hal", "kincal.ini", "README.md", "export.json"})
+    EXPECT_TRUE(fs::is_regular_file(dir + "/" + f)) << f;
+  const std::string readme = ki::read_text_file(dir + "/README.md");
+  EXPECT_TRUE(contains(readme, "LinuxCNC with these files")) << readme;
+  EXPECT_TRUE(contains(r.out, "wrote " + dir)) << r.out;
+
+  // Again without --force: refused, one line, the directory kept.
+  r = run_tool("export linuxcnc --model \"" + model + "\" --out \"" + dir + "\"");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "--force")) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(dir + "/README.md"));
+  // With --force, in inches: replaced.
+  r = run_tool("export linuxcnc --force --units inch --model \"" + model + "\" --out \"" + dir + "\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(contains(ki::read_text_file(dir + "/README.md"), "Lengths in inch"));
+
+  // A hybrid model: LinuxCNC has no kinematics for it.
+  r = run_tool("export linuxcnc --model \"" + kExamples + "/firmware/model.json\" --out \"" + dir + "-hybrid\"");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_TRUE(contains(r.err, "LinuxCNC has no kinematics for the family")) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "-hybrid"));
+
+  r = run_tool("export");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(contains(r.err, "linuxcnc")) << r.err;
+  fs::remove_all(dir);
+}
+
+}  // namespace

@@ -15,6 +15,17 @@ packages=(
   python3                                          # small helpers in scripts/
 )
 
+# `scripts/install-deps.sh linuxcnc` adds LinuxCNC 2.9 (Debian 12's
+# linuxcnc-uspace, its non-realtime POSIX build) for the linuxcnc stage of
+# test-all.sh, which runs `kincal export linuxcnc`'s files inside LinuxCNC
+# (host_tests/linuxcnc/). Without recommends: no GUI toolkits it does not need.
+for group in "$@"; do
+  case $group in
+    linuxcnc) packages+=(linuxcnc-uspace linuxcnc-uspace-dev) ;;
+    *) echo "install-deps: unknown group '$group' (linuxcnc)" >&2; exit 2 ;;
+  esac
+done
+
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

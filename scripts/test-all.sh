@@ -5,15 +5,19 @@
 # the last two from one clang build, build/sanitize, so that identify/ is
 # compiled with the sanitizers once -- and
 # the firmware core checks under qemu for the Cortex-M7 (double FPU) and the
-# Cortex-M4F (float).
-# Usage: scripts/test-all.sh [host|sanitize|fuzz|m7|m4f ...]   (default: all five)
+# Cortex-M4F (float), and `kincal export linuxcnc` checked inside LinuxCNC 2.9
+# itself (host_tests/linuxcnc/check_export.py: its genhexkins, compensation
+# tables and homing, headless).
+# Usage: scripts/test-all.sh [host|sanitize|fuzz|m7|m4f|linuxcnc ...]   (default: all six)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
 
 jobs=${KINCAL_JOBS:-$(nproc)}
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(host sanitize fuzz m7 m4f)
+[ ${#stages[@]} -gt 0 ] || stages=(host sanitize fuzz m7 m4f linuxcnc)
+groups=()
+for stage in "${stages[@]}"; do [ "$stage" != linuxcnc ] || groups+=(linuxcnc); done
+scripts/install-deps.sh "${groups[@]}"
 
 run_stage() {
   local name=$1; shift
@@ -79,7 +83,10 @@ for stage in "${stages[@]}"; do
               run_stage m7 -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m7.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
     m4f)      host_tool
               run_stage m4f -DCMAKE_TOOLCHAIN_FILE=toolchains/cortex-m4f.cmake -DKINCAL_HOST_TOOL="$PWD/build/host/apps/kincal" ;;
-    *) echo "unknown stage '$stage' (host, sanitize, fuzz, m7, m4f)" >&2; exit 2 ;;
+    linuxcnc) host_tool
+              echo "=== linuxcnc: kincal export linuxcnc inside LinuxCNC 2.9 (build/linuxcnc/RESULTS.md)"
+              python3 host_tests/linuxcnc/check_export.py --kincal build/host/apps/kincal --work build/linuxcnc ;;
+    *) echo "unknown stage '$stage' (host, sanitize, fuzz, m7, m4f, linuxcnc)" >&2; exit 2 ;;
   esac
 done
 echo "=== all stages passed: ${stages[*]}"

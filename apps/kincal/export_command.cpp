@@ -17,7 +17,7 @@ namespace kincal_app {
 
 CLI::App* add_export_command(CLI::App& app, ExportArgs& a) {
   CLI::App* e = app.add_subcommand("export", "write an identified model in another controller's own format");
-  e->require_subcommand(1);
+  e->require_subcommand(0, 1);  // none: main says which targets there are
   CLI::App* l = e->add_subcommand(
       "linuxcnc", "the files a LinuxCNC 2.9 hexapod (genhexkins) needs: HAL setp lines of the calibrated joints, "
                   "home offsets, joint compensation tables, an INI fragment and a README (docs/linuxcnc.md)");
@@ -40,7 +40,9 @@ CLI::App* add_export_command(CLI::App& app, ExportArgs& a) {
 
 int run_export(const ExportArgs& a) {
   ki::check_outputs({a.out}, {a.model, a.data});
+  ki::check_export_directory(a.out, a.force);
   const ki::CalibrationModel model = ki::read_model_file(a.model);
+  ki::check_linuxcnc_family(model);
   ki::LinuxCncExportOptions options;
   options.inch = a.units == "inch";
   options.comp_tolerance_mm = a.tolerance_um * 1e-3;

@@ -177,6 +177,11 @@ int run(int argc, char** argv) {
   if (*effects) return kincal_app::run_effects(effects_args);
   if (*plan) return kincal_app::run_plan(plan_args);
   if (*export_linuxcnc) return kincal_app::run_export(export_args);
+  if (*export_linuxcnc->get_parent()) {
+    std::cerr << "kincal: export: name the controller to export to: 'kincal export linuxcnc --model MODEL.json "
+                 "--out DIR' (run 'kincal export linuxcnc --help')\n";
+    return kExitUsage;
+  }
   return kExitUsage;
 }
 

@@ -218,12 +218,16 @@ std::string units_name(bool inch) { return inch ? "inch" : "mm"; }
 
 }  // namespace
 
-LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExportOptions& options) {
-  const std::string file = model.source_file.empty() ? std::string("MODEL.json") : model.source_file;
+void check_linuxcnc_family(const CalibrationModel& model) {
   if (!model.nominal.is_stewart())
-    throw InputError(file, 0, 0,
+    throw InputError(model.source_file.empty() ? std::string("MODEL.json") : model.source_file, 0, 0,
                      std::string("LinuxCNC has no kinematics for the family '") + model.nominal.family() +
                          "' (its genhexkins serves 6-UPS hexapods, family '" + kStewartFamily + "')");
+}
+
+LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExportOptions& options) {
+  const std::string file = model.source_file.empty() ? std::string("MODEL.json") : model.source_file;
+  check_linuxcnc_family(model);
   if (options.max_comp_entries < 3 || !(options.comp_tolerance_mm > 0))
     throw InputError("linuxcnc export: a compensation table needs at least 3 entries and a positive tolerance");
   // The controller's own check of the model (bounds, limits): LinuxCNC must
@@ -298,6 +302,10 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
       << model.estimator << "); do not edit: export again.\n"
       << "# genhexkins joint/leg N is kincal's leg N+1; base joints in the base (world) frame, platform joints in the\n"
       << "# platform frame, " << units_name(options.inch) << ". Load after genhexkins (docs/linuxcnc.md).\n";
+  // genhexkins' screw-lead term adds a strut-length change for the screw's
+  // rotation in its joints; kincal's strut length is |R·p + t − b| alone, and
+  // what that term models was identified into the parameters: it must be off.
+  hal << "setp genhexkins.screw-lead 0\n";
   for (int i = 0; i < 6; ++i)
     for (int a = 0; a < 3; ++a)
       hal << "setp genhexkins.base." << i << "." << "xyz"[a] << " " << fixed(cal.base(a, i) * unit) << "\n";
@@ -449,7 +457,7 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
   return out;
 }
 
-void write_export_directory(const std::map<std::string, std::string>& files, const std::string& dir, bool overwrite) {
+void check_export_directory(const std::string& dir, bool overwrite) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path target = fs::path(dir).lexically_normal();
@@ -462,6 +470,15 @@ void write_export_directory(const std::map<std::string, std::string>& files, con
     throw InputError(dir, 0, 0, "exists and is not a directory");
   const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
   if (!fs::is_directory(parent, ec)) throw InputError(dir, 0, 0, "its parent directory does not exist");
+}
+
+void write_export_directory(const std::map<std::string, std::string>& files, const std::string& dir, bool overwrite) {
+  namespace fs = std::filesystem;
+  check_export_directory(dir, overwrite);
+  std::error_code ec;
+  const fs::path target = fs::path(dir).lexically_normal();
+  const bool exists = fs::exists(fs::symlink_status(target, ec));
+  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
   const std::string tag = ".kincal-" + std::to_string(::getpid());
   const fs::path staging = parent / (target.filename().string() + tag + ".new");
   const fs::path old = parent / (target.filename().string() + tag + ".old");

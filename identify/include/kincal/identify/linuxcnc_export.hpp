@@ -81,7 +81,10 @@ struct LinuxCncExport {
 };
 
 // Throws InputError (naming the model file) for a model of a family LinuxCNC
-// has no kinematics for, or one the controller table check refuses.
+// has no kinematics for (genhexkins serves the 6-UPS).
+void check_linuxcnc_family(const CalibrationModel& model);
+
+// Also refuses (InputError) a model the controller's table check refuses.
 LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExportOptions& options = {});
 
 // Writes the files into `dir` as one step: they are written to a fresh
@@ -89,5 +92,9 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
 // old content, or the complete export. An existing `dir` is refused unless
 // `overwrite` (then the old one is replaced whole). InputError on failure.
 void write_export_directory(const std::map<std::string, std::string>& files, const std::string& dir, bool overwrite);
+// The refusals of write_export_directory that need no files (an existing
+// `dir` without `overwrite`, a missing parent), for a command to check before
+// it works.
+void check_export_directory(const std::string& dir, bool overwrite);
 
 }  // namespace kincal::identify
