@@ -26,8 +26,13 @@ and homing, driven headless through the `linuxcnc` Python module
        `kincal compensate` of the whole model to 0.1 um.
 4. The true machine re-simulated (`kincal simulate` with the true errors)
    on LinuxCNC's joint commands: the held-out pose error, against kincal's
-   own commands and the uncalibrated machine. The table goes to
-   RESULTS.md in the work directory (docs/linuxcnc.md quotes it).
+   own commands and the uncalibrated machine.
+5. The same machine in a warm shop, identified with thermal, which LinuxCNC
+   cannot carry: the error the export's README predicts on the held-out
+   poses and temperatures is the one the true machine shows on LinuxCNC's
+   commands.
+The tables go to RESULTS.md in the work directory (docs/linuxcnc.md quotes
+them).
 
 Usage: check_export.py --kincal build/host/apps/kincal --work build/linuxcnc
 Exit status 0 when every check holds.
@@ -280,6 +285,16 @@ def main():
          "sequence.csv", "--out", "joints_geometry.csv"])
     run_linuxcnc("export", [p[:3] + [v * DEG for v in p[3:]] for _, _, p in seq], "linuxcnc.csv", work)
 
+    def settled(row):
+        """The drive's command once LinuxCNC's compensation has settled:
+        pos-cmd + backlash-corr (the table at the commanded position and
+        direction) + motor-offset, in the drive's old convention (+ the old
+        home offset). motor-pos-cmd itself carries backlash-filt, which slews
+        toward backlash-corr and can stall when a move ends first
+        (docs/linuxcnc.md): counted and reported, not the check."""
+        return [float(row["pos_cmd_%d" % j]) + float(row["corr_%d" % j]) + float(row["motor_off_%d" % j])
+                + home_before[j] for j in range(6)]
+
     lcnc = read_csv("linuxcnc.csv")
     full = read_csv("joints_kincal.csv")
     geo = read_csv("joints_geometry.csv")
@@ -292,14 +307,7 @@ def main():
         if row["ok"] != "1" or row["fwd_kins_fail"] != "0":
             bad += 1
         q_pos = [float(row["pos_cmd_%d" % j]) - (home_after[j] - home_before[j]) for j in range(6)]
-        # The drive's command once LinuxCNC's compensation has settled:
-        # pos-cmd + backlash-corr (the table at the commanded position and
-        # direction) + motor-offset, read in the drive's old convention (+ the
-        # old home offset). motor-pos-cmd itself carries backlash-filt, which
-        # slews toward backlash-corr and can stall when a move ends first
-        # (docs/linuxcnc.md): counted and reported, not the check.
-        q_settled = [float(row["pos_cmd_%d" % j]) + float(row["corr_%d" % j]) + float(row["motor_off_%d" % j])
-                     + home_before[j] for j in range(6)]
+        q_settled = settled(row)
         q_output = [float(row["motor_cmd_%d" % j]) + home_before[j] for j in range(6)]
         lcnc_q.append(q_settled)
         worst_geo = max(worst_geo, max(abs(q_pos[j] - float(geo[k]["q%d" % (j + 1)])) for j in range(6)))
@@ -317,14 +325,15 @@ def main():
           "difference from kincal %.3g mm)" % (unsettled, len(targets), worst_output))
 
     # 4. The true machine on each set of joint commands.
-    def resimulate(name, joints):
+    def resimulate(name, joints, temps=None, extra=()):
         rows = []
         for k, (ident, role, p) in enumerate(seq):
-            rows.append([ident, role] + ["%.12f" % v for v in p] + ["%.12f" % q for q in joints[k]])
+            rows.append([ident, role] + ["%.12f" % v for v in p] + ["%.12f" % q for q in joints[k]] +
+                        (["%.3f" % temps[k]] if temps else []))
         write_csv(name + "_q.csv", ["id", "role", "x", "y", "z", "rx", "ry", "rz"] +
-                  ["q%d" % j for j in range(1, 7)], rows)
+                  ["q%d" % j for j in range(1, 7)] + (["temp"] if temps else []), rows)
         run([kincal, "simulate", "--robot", "robot.json", "--poses", name + "_q.csv", "--errors", "true_errors.csv",
-             *effect_args, "--out", name + "_meas.csv"], stdout=subprocess.DEVNULL)
+             *effect_args, *extra, "--out", name + "_meas.csv"], stdout=subprocess.DEVNULL)
         return pose_errors(name + "_meas.csv", targets)
 
     as_q = lambda rows: [[float(r["q%d" % j]) for j in range(1, 7)] for r in rows]
@@ -336,6 +345,40 @@ def main():
         ("kincal compensate, whole model", resimulate("kincal", as_q(full))),
         ("LinuxCNC with the exported files (settled)", resimulate("linuxcnc", lcnc_q)),
     ]
+    # 5. The same machine in a warm shop (thermal expansion, 1.2e-5 /degC at
+    # 16-32 degC): identified with thermal too, which LinuxCNC cannot carry.
+    # The export's README predicts, on the held-out poses and temperatures,
+    # the error LinuxCNC's files leave; LinuxCNC runs them; the true machine
+    # on its commands must show that error.
+    thermal = ["--effect", "thermal:c=1.2e-05"]
+    cal_temps = [rng.uniform(16, 32) for _ in cal]
+    write_csv("cal_poses_warm.csv", ["id", "x", "y", "z", "rx", "ry", "rz", "temp"],
+              [["c%d" % k] + ["%.12f" % v for v in p] + ["%.3f" % cal_temps[k]] for k, p in enumerate(cal)])
+    run([kincal, "simulate", "--robot", "robot.json", "--poses", "cal_poses_warm.csv", "--errors",
+         "true_errors.csv", *effect_args, *thermal, "--noise-mm", "0.001", "--noise-rad", "2e-6", "--seed", "6",
+         "--out", "meas_warm.csv"])
+    run([kincal, "identify", "--robot", "robot.json", "--data", "meas_warm.csv", "--out", "model_warm.json",
+         "--effects", "scale,backlash,cyclic,thermal"], stdout=subprocess.DEVNULL)
+    seq_temps = []
+    for k in range(a.poses):
+        t = rng.uniform(16, 32)
+        seq_temps += [t, t]
+    write_csv("heldout_warm.csv", ["id", "x", "y", "z", "rx", "ry", "rz", "temp"],
+              [[i] + ["%.12f" % v for v in p] + ["%.3f" % seq_temps[k]]
+               for k, (i, role, p) in enumerate(seq) if i in targets])
+    run([kincal, "export", "linuxcnc", "--model", "model_warm.json", "--data", "heldout_warm.csv", "--out",
+         "export_warm"])
+    with open("export_warm/export.json") as f:
+        exported_warm = json.load(f)
+    assert exported_warm["not_carried"] == ["thermal"], exported_warm["not_carried"]
+    predicted_warm = {p["what"]: p for p in exported_warm["predicted"]}["LinuxCNC with these files"]
+    run_linuxcnc("export_warm", [p[:3] + [v * DEG for v in p[3:]] for _, _, p in seq], "linuxcnc_warm.csv", work)
+    home_before = exported_warm["home_offset_before"]
+    warm_q = [settled(r) for r in read_csv("linuxcnc_warm.csv")]
+    warm = resimulate("linuxcnc_warm", warm_q, seq_temps, thermal)
+    print("warm machine: LinuxCNC leaves %.3f um RMS on the held-out poses; the export predicted %.3f um"
+          % (warm[0] * 1e3, predicted_warm["rms_position_um"]))
+
     predicted = {p["what"]: p for p in exported["predicted"]}
     lines = ["| held-out poses commanded by | RMS position (um) | max position (um) | RMS orientation (urad) |",
              "|---|---|---|---|"]
@@ -365,6 +408,18 @@ def main():
         "The true machine (`kincal simulate` with the true errors), commanded to the held-out poses:",
         "",
     ] + lines
+    report += [
+        "",
+        "The same machine in a warm shop (thermal expansion 1.2e-5 /degC, 16-32 degC), identified with "
+        "`--effects scale,backlash,cyclic,thermal`; LinuxCNC cannot carry thermal. On the %d held-out poses:"
+        % a.poses,
+        "",
+        "| | RMS position (um) | max position (um) |",
+        "|---|---|---|",
+        "| predicted by the export's README (LinuxCNC with these files) | %.3f | %.3f |"
+        % (predicted_warm["rms_position_um"], predicted_warm["max_position_um"]),
+        "| the true machine on LinuxCNC's commands (settled) | %.3f | %.3f |" % (warm[0] * 1e3, warm[1] * 1e3),
+    ]
     with open("RESULTS.md", "w") as f:
         f.write("\n".join(report) + "\n")
     print("\n".join(report))
@@ -383,6 +438,11 @@ def main():
         failures.append("held-out RMS with LinuxCNC %.4f um vs kincal %.4f um" % (lcnc_rms * 1e3, kincal_rms * 1e3))
     if not lcnc_rms < 0.01 * results[0][1][0]:
         failures.append("held-out error did not fall: %.4f um of %.4f um" % (lcnc_rms * 1e3, results[0][1][0] * 1e3))
+    # What the README predicts is what the warm machine shows, to 10 % (plus
+    # the identification's own 0.5 um).
+    if not abs(warm[0] * 1e3 - predicted_warm["rms_position_um"]) <= 0.1 * predicted_warm["rms_position_um"] + 0.5:
+        failures.append("warm machine: %.3f um against the predicted %.3f um"
+                        % (warm[0] * 1e3, predicted_warm["rms_position_um"]))
     if failures:
         raise SystemExit("check_export: FAILED: " + "; ".join(failures))
     print("check_export: all checks hold")

@@ -31,6 +31,8 @@ namespace {
 constexpr double kMmPerInch = 25.4;
 // The joint-alone effects a compensation table carries exactly (up to its
 // interpolation): each Δq_i depends on q_i and the direction of motion only.
+// (A joint-kind formula effect of the joint's own command and direction
+// belongs here too once formula effects exist, issue #32.)
 const std::set<std::string> kCarriedByTables = {"scale", "backlash", "cyclic"};
 // The table reaches this far past the stroke on each side (mm), so a command
 // at the stroke's end is interpolated, not clamped to the last entry.
@@ -416,7 +418,8 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
   } else {
     md << "The machine as the model describes it (calibrated geometry and every identified effect), commanded in "
           "each way, on the "
-       << out.predictions.front().poses << " measured poses of `" << options.data->file << "`:\n\n"
+       << out.predictions.front().poses << " poses (with their temperatures and directions) of `"
+       << options.data->file << "`:\n\n"
        << "| commanded by | poses | RMS position (um) | max position (um) | RMS orientation (urad) |\n|---|---|---|---|---|\n";
     for (const LinuxCncPrediction& p : out.predictions)
       md << "| " << p.what << " | " << p.poses << " | " << fixed(p.rms_position_mm * 1e3, 3) << " | "
