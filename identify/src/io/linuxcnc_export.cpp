@@ -381,6 +381,15 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
          for (const std::string& n : out.carried) s += (s.empty() ? "" : ", ") + n;
          return s;
        }() << " |\n";
+  md << "\n## Use\n\n"
+     << "1. Copy `kincal-geometry.hal`" << (out.comp.empty() ? "" : " and `joint-N.comp`")
+     << " into the machine's configuration directory.\n"
+     << "2. Merge `kincal.ini` into the machine's INI: in each `[JOINT_n]` its keys replace the ones there; "
+        "add its `HALFILE` line after the HAL file that loads genhexkins (`loadrt [KINS]KINEMATICS`), so its "
+        "`setp` lines come last.\n"
+     << "3. Home the machine as before: the home offsets carry the identified encoder offsets.\n"
+     << "4. Keep genhexkins' `spindle-offset` and `tool-offset` at 0 (G49) when positions must be kincal's: "
+        "genhexkins adds them to the z of every joint.\n";
   md << "\n## Carried\n\n- geometry: the 36 calibrated joint positions (exact: genhexkins evaluates the same strut "
         "lengths kincal does);\n- encoder offsets dl1..dl6 as `HOME_OFFSET` (exact).\n";
   if (!out.comp.empty()) {
@@ -396,7 +405,10 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
        << general(worst * 1e3, 3) << " um of kincal's correction over the stroke (+/- " << general(kCompMarginMm)
        << " mm).\n  LinuxCNC chooses the forward or reverse column by the sign of the joint's commanded velocity; "
           "kincal by the sign of the joint's change since the last point. They agree when each joint moves "
-          "monotonically into a point (a final approach move); a leg can reverse along a long Cartesian line.\n";
+          "monotonically into a point (a final approach move); a leg can reverse along a long Cartesian line.\n"
+          "  LinuxCNC 2.9 slews a step of the table (`backlash-filt` toward `backlash-corr`) while the joint "
+          "moves; measured headless, it had not finished at the end of half of the 0.2-0.6 mm approach moves "
+          "(docs/linuxcnc.md): approach points that matter with longer moves, and compare the two pins there.\n";
   }
   md << "\n## Not carried\n\n";
   if (out.not_carried.empty()) {
