@@ -406,9 +406,10 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
        << " mm).\n  LinuxCNC chooses the forward or reverse column by the sign of the joint's commanded velocity; "
           "kincal by the sign of the joint's change since the last point. They agree when each joint moves "
           "monotonically into a point (a final approach move); a leg can reverse along a long Cartesian line.\n"
-          "  LinuxCNC 2.9 slews a step of the table (`backlash-filt` toward `backlash-corr`) while the joint "
-          "moves; measured headless, it had not finished at the end of half of the 0.2-0.6 mm approach moves "
-          "(docs/linuxcnc.md): approach points that matter with longer moves, and compare the two pins there.\n";
+          "  LinuxCNC 2.9 adds a step of the table (a backlash reversal) through a filter (`backlash-filt` "
+          "toward `backlash-corr`); measured headless, it took a step at once only when it was at most the "
+          "joint's MAX_ACCELERATION x servo period^2 / 4, larger ones when the joint moved on (docs/linuxcnc.md): "
+          "compare the two pins at a point that matters.\n";
   }
   md << "\n## Not carried\n\n";
   if (out.not_carried.empty()) {
