@@ -20,43 +20,20 @@
 #include "kincal/identify/robot.hpp"
 #include "large_hexapod.hpp"
 
+#include "tool_run.hpp"
+
 namespace ki = kincal::identify;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct ToolRun {
-  int code = -1;
-  std::string out, err;
-};
-
 const std::string kDir = std::string(KINCAL_BINARY_DIR) + "/app_test_out";
 const std::string kExamples = std::string(KINCAL_SOURCE_DIR) + "/examples";
 
-// ctest runs the test cases as parallel processes: per-test capture files.
-std::string test_name() { return ::testing::UnitTest::GetInstance()->current_test_info()->name(); }
-
-ToolRun run_tool(const std::string& args) {
-  fs::create_directories(kDir);
-  const std::string out = kDir + "/" + test_name() + ".stdout", err = kDir + "/" + test_name() + ".stderr";
-  // Bounded: a tool that hangs (a FIFO, /dev/zero) fails the test with exit
-  // status 124 instead of stalling the suite.
-  const std::string cmd =
-      std::string("timeout 300 \"") + KINCAL_TOOL + "\" " + args + " >\"" + out + "\" 2>\"" + err + "\"";
-  const int status = std::system(cmd.c_str());
-  ToolRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = ki::read_text_file(out);
-  r.err = ki::read_text_file(err);
-  return r;
-}
-
-std::string write(const std::string& name, const std::string& text) {
-  fs::create_directories(kDir);
-  const std::string path = kDir + "/" + name;
-  std::ofstream(path, std::ios::binary) << text;
-  return path;
-}
+using kincal_test::test_name;
+using kincal_test::ToolRun;
+ToolRun run_tool(const std::string& args) { return kincal_test::run_tool_in(kDir, args); }
+std::string write(const std::string& name, const std::string& text) { return kincal_test::write_in(kDir, name, text); }
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 

@@ -25,6 +25,7 @@
 
 #include <Eigen/Dense>
 #include <limits>
+#include <type_traits>
 
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/reference_machines.hpp"
@@ -292,11 +293,77 @@ TEST(coreCompensation, ValidateTableAgainstMachineLimits) {
   EXPECT_EQ(validate_table(good_s, unordered), CS::TableLimits);
 }
 
+// Issue #31: the hybrid's source errors are lengths (mm) and angles (rad);
+// each kind has its own cap (max_geometry_error, max_angle_error), where one
+// cap of 10 "mm" used to serve both. An angle of 0.05 rad and a length of
+// 0.05 mm are each checked against their own cap only.
+TEST(coreCompensation, TheHybridsAngleCapBoundsAnglesAndTheLengthCapLengths) {
+  using L = HybridErrorLayout;
+  static_assert(!L::angular(0) && !L::angular(2) && L::angular(3) && L::angular(5), "encoders: legs mm, wrist rad");
+  static_assert(!L::angular(L::ups(1) + 2) && L::angular(L::ups(1) + 3), "frame 0: x y z α β γ");
+  static_assert(!L::angular(L::ups(0) + 6 + 2) && L::angular(L::ups(0) + 6 + 3), "revolute frame 1: x y z | α β");
+  static_assert(!L::angular(L::ups(2) + 16 + 1) && L::angular(L::ups(2) + 16 + 2), "prismatic frame 3: x y | α β γ");
+  static_assert(!L::angular(L::up() + 16 + 1) && L::angular(L::up() + 20), "the UP limb's prismatic frame 3");
+  static_assert(!L::angular(L::wrist() + 12) && L::angular(L::wrist() + 14), "wrist frame 6: x y z | α β");
+  int angles = 0;
+  for (int k = L::kEncoders; k < L::size(); ++k) angles += L::angular(k) ? 1 : 0;
+  EXPECT_EQ(angles, 3 * (3 + 2 + 2 + 3 + 2 + 2 + 2) + (3 + 2 + 2 + 3) + 3 * 2);  // 64 structural angles
+
+  const HybridCalibrationTable<double> good = hybrid_table();
+  MachineLimits<double> l = limits_from_bounds(nominal_table(make_hybrid_seed000<double>()).bounds);
+  EXPECT_EQ(l.max_angle_error, 0.1);  // DefaultLimitCaps: today's results unchanged
+  EXPECT_EQ(l.max_geometry_error, 10.0);
+  l.max_angle_error = 0.04;
+  l.max_geometry_error = 0.06;
+  const int angle = L::ups(1) + 4, length = L::ups(1) + 1;  // Δβ_0,2 and Δy_0,2
+  auto status_with = [&](int k, double v) {
+    HybridCalibrationTable<double> t = good;
+    t.machine.source_errors[k] = v;
+    return validate_table(seal_table(t), l);
+  };
+  EXPECT_EQ(validate_table(good, l), CS::Ok);
+  EXPECT_EQ(status_with(angle, 0.05), CS::TableLimits);  // above the angle cap
+  EXPECT_EQ(status_with(angle, -0.03), CS::Ok);
+  EXPECT_EQ(status_with(length, 0.05), CS::Ok);  // above the angle cap, below the length cap
+  EXPECT_EQ(status_with(length, -0.07), CS::TableLimits);
+  l.max_angle_error = 1.0;  // a large angle cap does not open lengths
+  EXPECT_EQ(status_with(length, 0.07), CS::TableLimits);
+  EXPECT_EQ(status_with(angle, 0.07), CS::Ok);
+  // Not a sane cap.
+  l.max_angle_error = -1;
+  EXPECT_EQ(validate_table(good, l), CS::TableLimits);
+  l.max_angle_error = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(validate_table(good, l), CS::TableLimits);
+}
+
+// Issue #31: Compensator(table) took the table's own bounds as the machine's
+// limits; a firmware must not get that by accident. The trusting form is
+// spelled out (trust_table_bounds), the limits form is the other, and a
+// temporary table is refused for both. (`Compensator(t, {})` does not
+// compile either: the tag's explicit constructor makes it ambiguous.)
+TEST(coreCompensation, TheTrustingFormIsExplicit) {
+  using M = HybridMachine<double>;
+  using C = Compensator<M>;
+  using T = CalibrationTable<M>;
+  static_assert(!std::is_constructible<C, const T&>::value, "no one-argument Compensator(table)");
+  static_assert(!std::is_constructible<C, T&>::value, "no one-argument Compensator(table)");
+  static_assert(std::is_constructible<C, const T&, TrustTableBounds>::value, "the trusting form");
+  static_assert(std::is_constructible<C, const T&, const MachineLimits<double>&>::value, "the limits form");
+  static_assert(!std::is_constructible<C, T&&, TrustTableBounds>::value, "a temporary table would dangle");
+  static_assert(!std::is_constructible<C, T&&, const MachineLimits<double>&>::value, "a temporary table would dangle");
+  static_assert(!std::is_convertible<const T&, C>::value, "not implicitly from a table");
+  static_assert(!std::is_constructible<Compensator<StewartMachine<float>>, const CalibrationTable<StewartMachine<float>>&>::value,
+                "no one-argument Compensator(table), any machine or scalar");
+  const T t = hybrid_table();
+  EXPECT_EQ(C(t, trust_table_bounds).status(), CS::Ok);
+  EXPECT_EQ(C(t, limits_from_bounds(t.bounds)).status(), CS::Ok);
+}
+
 // Issue #10 item 3: a rotation that is not one (×1.001) and approach
 // directions other than ±1 (0, −5, 1e30) were compensated; now InvalidInput.
 TEST(coreCompensation, SkewedRotationsAndBadDirectionsAreInvalidInput) {
   const StewartCalibrationTable<double> t = with_effects(stewart_table());
-  const StewartCompensator<double> c(t);
+  const StewartCompensator<double> c(t, trust_table_bounds);
   Vec6<double> home;
   ASSERT_EQ(c.home_command(home), CS::Ok);
   auto state = c.start(home);
@@ -322,7 +389,7 @@ TEST(coreCompensation, SkewedRotationsAndBadDirectionsAreInvalidInput) {
   EXPECT_EQ(c.compensate(state, d, q), CS::Ok);
   // float: its own rounding of a rotation built in float is accepted.
   const auto tf = table_cast<float>(t);
-  const StewartCompensator<float> cf(tf);
+  const StewartCompensator<float> cf(tf, trust_table_bounds);
   Vec6<float> hf;
   ASSERT_EQ(cf.home_command(hf), CS::Ok);
   auto sf = cf.start(hf);
@@ -335,12 +402,12 @@ TEST(coreCompensation, SkewedRotationsAndBadDirectionsAreInvalidInput) {
 
 template <class Machine> void check_corrupt_table_holds(CalibrationTable<Machine> t, const Pose<double>& pose) {
   using S = typename Machine::Scalar;
-  const Compensator<Machine> good(t);
+  const Compensator<Machine> good(t, trust_table_bounds);
   ASSERT_EQ(good.status(), CS::Ok);
   Vec6<S> home;
   ASSERT_EQ(good.home_command(home), CS::Ok);
   t.bounds.max_correction[1] *= S(2);  // not resealed: the CRC no longer matches
-  const Compensator<Machine> bad(t);
+  const Compensator<Machine> bad(t, trust_table_bounds);
   EXPECT_EQ(bad.status(), CS::TableCrc);
   auto state = bad.start(home);
   Vec6<S> out = Vec6<S>::Constant(S(-7));
@@ -381,7 +448,7 @@ Vec6<double> nominal_load(const HybridCalibrationTable<double>& t, const Pose<do
 template <class Machine>
 void check_effects_inverted(const CalibrationTable<Machine>& plain, Pose<double> (*make_pose)(test::Random&)) {
   const CalibrationTable<Machine> effects = with_effects(plain);
-  const Compensator<Machine> with(effects), without(plain);
+  const Compensator<Machine> with(effects, trust_table_bounds), without(plain, trust_table_bounds);
   ASSERT_EQ(with.status(), CS::Ok);
   const EffectParameters<double> e = to_core(effects.effects);
   Vec6<double> home;
@@ -442,7 +509,7 @@ TEST(coreCompensation, ThermalPreScalesThePose) {
   StewartCalibrationTable<double> s = stewart_table();
   s.effects.thermal = 1.2e-5;
   s = seal_table(s);
-  const StewartCompensator<double> cs(s);
+  const StewartCompensator<double> cs(s, trust_table_bounds);
   const StewartGeometry<double> cal = to_core(s.machine.calibrated);
   const EffectParameters<double> e = to_core(s.effects);
   auto state = cs.start(Vec6<double>::Constant(233.0));
@@ -462,7 +529,7 @@ TEST(coreCompensation, ThermalPreScalesThePose) {
   HybridCalibrationTable<double> h = hybrid_table(false);
   h.effects.thermal = 1.2e-5;
   h = seal_table(h);
-  const HybridCompensator<double> ch(h);
+  const HybridCompensator<double> ch(h, trust_table_bounds);
   HybridGeometry<double> controller = to_core(h.machine.nominal);
   for (int i = 0; i < 6; ++i) controller.joint_offset(i) += h.machine.encoder_offsets[i];
   const EffectParameters<double> eh = to_core(h.effects);
@@ -520,7 +587,7 @@ template <class S> void check_stewart_reliability() {
   using P = Pose<S>;
   const S nan = std::numeric_limits<S>::quiet_NaN(), inf = std::numeric_limits<S>::infinity();
   StewartCalibrationTable<S> t = table_cast<S>(stewart_table());
-  const StewartCompensator<S> c(t);
+  const StewartCompensator<S> c(t, trust_table_bounds);
   ASSERT_EQ(c.status(), CS::Ok);
   Vec6<S> home;
   ASSERT_EQ(c.home_command(home), CS::Ok);
@@ -545,7 +612,7 @@ template <class S> void check_stewart_reliability() {
     ASSERT_EQ(c.compensate(st, good, q), CS::Ok);
     lim.bounds.max_joint[2] = q(2) + S(1);
     lim = seal_table(lim);
-    const StewartCompensator<S> cl(lim);
+    const StewartCompensator<S> cl(lim, trust_table_bounds);
     auto sl = cl.start(home);
     expect_failure(cl, sl, point(P::from_xyz_rpy(S(5), S(-3), S(210), S(0.01), S(0), S(0.02))), good,
                    CS::OutOfLimits, "table command limit");
@@ -559,7 +626,7 @@ template <class S> void check_stewart_reliability() {
       wide.machine.nominal.max_length[i] = wide.machine.calibrated.max_length[i] = wide.bounds.max_joint[i] = S(1000);
     }
     wide = seal_table(wide);
-    const StewartCompensator<S> cw(wide);
+    const StewartCompensator<S> cw(wide, trust_table_bounds);
     auto sw = cw.start(home);
     const double yaw = test::find_stewart_singular_yaw();
     ASSERT_GT(yaw, 0.1);
@@ -577,7 +644,7 @@ template <class S> void check_stewart_reliability() {
       tight.machine.calibrated.length_offset[i] = tight.machine.nominal.length_offset[i];
     }
     tight = seal_table(tight);
-    const StewartCompensator<S> ct(tight);
+    const StewartCompensator<S> ct(tight, trust_table_bounds);
     auto s2 = ct.start(home);
     Vec6<S> q;
     EXPECT_EQ(ct.compensate(s2, good, q), CS::OversizedCorrection);
@@ -591,7 +658,7 @@ template <class S> void check_hybrid_reliability() {
   using P = Pose<S>;
   const S nan = std::numeric_limits<S>::quiet_NaN();
   const HybridCalibrationTable<S> t = table_cast<S>(hybrid_table());
-  const HybridCompensator<S> c(t);
+  const HybridCompensator<S> c(t, trust_table_bounds);
   ASSERT_EQ(c.status(), CS::Ok);
   Vec6<S> home;
   ASSERT_EQ(c.home_command(home), CS::Ok);
@@ -615,7 +682,7 @@ template <class S> void check_hybrid_reliability() {
       wide.machine.nominal.max_joint[i] = wide.bounds.max_joint[i] = S(1e4);
     }
     wide = seal_table(wide);
-    const HybridCompensator<S> cw(wide);
+    const HybridCompensator<S> cw(wide, trust_table_bounds);
     auto sw = cw.start(home);
     const double t5 = test::find_hybrid_singular_theta5();
     ASSERT_GT(t5, 0.1);
@@ -631,7 +698,7 @@ template <class S> void check_hybrid_reliability() {
     for (int i = 0; i < 6; ++i) big.bounds.max_correction[i] = i < 3 ? S(0.5) : S(0.001);
     big = seal_table(big);
     ASSERT_EQ(validate_table(big), CS::Ok);
-    const HybridCompensator<S> cb(big);
+    const HybridCompensator<S> cb(big, trust_table_bounds);
     auto sb = cb.start(home);
     Vec6<S> q;
     EXPECT_EQ(cb.compensate(sb, good, q), CS::OversizedCorrection);
@@ -653,9 +720,9 @@ template <class Machine>
 void float_vs_double(const CalibrationTable<Machine>& t, Pose<double> (*make_pose)(test::Random&), const char* name) {
   using FloatMachine = typename std::conditional<Machine::family == MachineFamily::Hybrid, HybridMachine<float>,
                                                  StewartMachine<float>>::type;
-  const Compensator<Machine> cd(t);
+  const Compensator<Machine> cd(t, trust_table_bounds);
   const auto float_table = table_cast<float>(t);  // the compensator reads it in place
-  const Compensator<FloatMachine> cf(float_table);
+  const Compensator<FloatMachine> cf(float_table, trust_table_bounds);
   ASSERT_EQ(cf.status(), CS::Ok);
   Vec6<double> home;
   ASSERT_EQ(cd.home_command(home), CS::Ok);
@@ -705,7 +772,7 @@ template <class Machine> void run_without_heap(const CalibrationTable<Machine>& 
   using S = typename Machine::Scalar;
   HeapForbidden guard;
   EXPECT_EQ(validate_table(t), CS::Ok);
-  const Compensator<Machine> c(t);
+  const Compensator<Machine> c(t, trust_table_bounds);
   Vec6<S> home, q;
   ASSERT_EQ(c.home_command(home), CS::Ok);
   auto state = c.start(home);

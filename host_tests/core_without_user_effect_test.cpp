@@ -14,14 +14,14 @@ using namespace kincal;
 
 TEST(coreWithoutUserEffect, TableWithUserNumbersIsRefused) {
   const StewartCalibrationTable<double> plain = nominal_table(make_stewart_seed001<double>());
-  const Compensator<StewartMachine<double>> ok(plain);
+  const Compensator<StewartMachine<double>> ok(plain, trust_table_bounds);
   EXPECT_EQ(ok.status(), CompensationStatus::Ok);
 
   StewartCalibrationTable<double> with_user = plain;
   with_user.effects.user[2] = 1e-5;
   const StewartCalibrationTable<double> sealed = seal_table(with_user);
   EXPECT_EQ(validate_table(sealed), CompensationStatus::Ok);  // a valid table ...
-  Compensator<StewartMachine<double>> refused(sealed);
+  Compensator<StewartMachine<double>> refused(sealed, trust_table_bounds);
   EXPECT_EQ(refused.status(), CompensationStatus::TableValues);  // ... this build cannot run
   refused.set_user_effect([](const double*, int, const Vec6<double>&, const EffectInputs<double>&) { return 0.0; });
   EXPECT_EQ(refused.status(), CompensationStatus::TableValues);  // setting code does not change that

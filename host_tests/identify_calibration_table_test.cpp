@@ -105,11 +105,11 @@ TEST(identifyCalibrationTable, HybridCompensatorEqualsCompensateHybrid) {
   const ki::HybridCompensation reference = ki::hybrid_compensation_from_model(model);
   const HybridCalibrationTable<double> table = ki::hybrid_calibration_table(model);
   ASSERT_EQ(validate_table(table), CompensationStatus::Ok);
-  const HybridCompensator<double> comp(table);
+  const HybridCompensator<double> comp(table, trust_table_bounds);
   ASSERT_EQ(comp.status(), CompensationStatus::Ok);
   const HybridCalibrationTable<float> table_f = table_cast<float>(table);
   ASSERT_EQ(validate_table(table_f), CompensationStatus::Ok);
-  const HybridCompensator<float> comp_f(table_f);
+  const HybridCompensator<float> comp_f(table_f, trust_table_bounds);
   Vec6<double> home;
   ASSERT_EQ(comp.home_command(home), CompensationStatus::Ok);
   auto state = comp.start(home);
@@ -150,7 +150,7 @@ TEST(identifyCalibrationTable, StewartCompensatorIsTheCalibratedIk) {
   const ki::Robot calibrated = ki::calibrated_robot(model);
   const StewartCalibrationTable<double> table = ki::stewart_calibration_table(model);
   ASSERT_EQ(validate_table(table), CompensationStatus::Ok);
-  const StewartCompensator<double> comp(table);
+  const StewartCompensator<double> comp(table, trust_table_bounds);
   Vec6<double> home;
   ASSERT_EQ(comp.home_command(home), CompensationStatus::Ok);
   auto state = comp.start(home);

@@ -176,7 +176,7 @@ std::vector<Vec6<double>> compensate_test_rows(const ki::CalibrationModel& model
   std::vector<Vec6<double>> out;
   std::visit(
       [&](const auto& table) {
-        const kincal::Compensator<typename std::decay_t<decltype(table)>::MachineType> compensator(table);
+        const kincal::Compensator<typename std::decay_t<decltype(table)>::MachineType> compensator(table, kincal::trust_table_bounds);
         EXPECT_EQ(compensator.status(), kincal::CompensationStatus::Ok);
         Vec6<double> home = Vec6<double>::Zero();
         compensator.home_command(home);

@@ -303,7 +303,7 @@ HybridLargeCase hybrid_case(const ki::Robot& robot, double error_scale) {
 double held_out_compensated_rms(const ki::Robot& robot, const ki::HybridCalibration& c, const HybridLargeCase& data) {
   const ki::CalibrationModel m = ki::hybrid_model(robot, c);
   const kincal::HybridCalibrationTable<double> table = ki::hybrid_calibration_table(m);
-  const kincal::HybridCompensator<double> comp(table);
+  const kincal::HybridCompensator<double> comp(table, kincal::trust_table_bounds);
   Vec6<double> home;
   if (comp.home_command(home) != kincal::CompensationStatus::Ok) return 1e9;
   auto state = comp.start(home);

@@ -188,7 +188,7 @@ TEST(LinuxCncExport, GeometryAndHomeOffsetsGiveKincalsCommandsThroughAnIndepende
     for (int j = 0; j < 6; ++j) shift(j) = ini.at("JOINT_" + std::to_string(j) + ".HOME_OFFSET") - home_nominal(j);
 
     const auto table = ki::stewart_calibration_table(model);
-    Compensator<StewartMachine<double>> comp(table);
+    Compensator<StewartMachine<double>> comp(table, trust_table_bounds);
     ASSERT_EQ(comp.status(), CompensationStatus::Ok);
     auto state = comp.start(Vec6<double>::Zero());
     std::mt19937_64 rng(11);
@@ -227,7 +227,7 @@ TEST(LinuxCncExport, CompensationTablesCarryScaleBacklashAndCyclicWithinATenthOf
     EXPECT_GE(files.back().nominal.back(), ini.at(key + ".MAX_LIMIT"));
   }
   const auto table = ki::stewart_calibration_table(model);
-  Compensator<StewartMachine<double>> comp(table);
+  Compensator<StewartMachine<double>> comp(table, trust_table_bounds);
   ASSERT_EQ(comp.status(), CompensationStatus::Ok);
   comp.set_user_effect(nullptr);
   auto state = comp.start(Vec6<double>::Zero());

@@ -134,7 +134,7 @@ TEST(identifyTableWriter, CompiledHeaderCompensatesLikeTheHost) {
   EXPECT_EQ(compiled.crc, host.crc);
   EXPECT_EQ(validate_table(generated::Tables<float>::calibration()), CompensationStatus::Ok);
   EXPECT_EQ(validate_table(generated::Tables<float>::nominal()), CompensationStatus::Ok);
-  const HybridCompensator<double> a(compiled), b(host);
+  const HybridCompensator<double> a(compiled, trust_table_bounds), b(host, trust_table_bounds);
   auto sa = a.start(Vec6<double>::Zero()), sb = b.start(Vec6<double>::Zero());
   for (int k = 0; k < 20; ++k) {
     const Pose<double> p = Pose<double>::from_xyz_rpy(-200 + 20 * k, 100 - 10 * k, -40 + 4 * k, 0.01 * k, -0.02, 0.005 * k);

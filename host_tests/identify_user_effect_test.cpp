@@ -76,7 +76,7 @@ double compensated_test_rms_um(const ki::CalibrationModel& model, const ki::Effe
   commands.has_q = true;
   std::visit(
       [&](const auto& table) {
-        kincal::Compensator<typename std::decay_t<decltype(table)>::MachineType> compensator(table);
+        kincal::Compensator<typename std::decay_t<decltype(table)>::MachineType> compensator(table, kincal::trust_table_bounds);
         ASSERT_EQ(compensator.status(), kincal::CompensationStatus::Ok);
         if (plug_in) compensator.set_user_effect(model.effects.to_core(model.nominal).user_error);
         Vec6<double> home = Vec6<double>::Zero();

@@ -180,7 +180,7 @@ void expect_no_point_lost(const std::vector<JointCommand<double>>& out, const st
 template <class Machine>
 std::vector<Vec6<double>> direct(const CalibrationTable<Machine>& t, const std::vector<NcInput<double>>& in,
                                  std::vector<CS>* statuses = nullptr, UserJointError<double> user_effect = nullptr) {
-  Compensator<Machine> comp(t);
+  Compensator<Machine> comp(t, trust_table_bounds);
   comp.set_user_effect(user_effect);
   Vec6<double> home;
   EXPECT_EQ(comp.home_command(home), CS::Ok);
@@ -291,7 +291,7 @@ TEST(PortController, AUserEffectReturningNanIsHeldNotSent) {
   // too), so only a configured initial command — where the machine stands,
   // inside the limits — gives the controller something safe to hold.
   rig.config.has_initial_command = true;
-  ASSERT_EQ(Compensator<StewartM>(stewart_nominal()).home_command(rig.config.initial_command), CS::Ok);
+  ASSERT_EQ(Compensator<StewartM>(stewart_nominal(), trust_table_bounds).home_command(rig.config.initial_command), CS::Ok);
   auto& ctl = rig.run(in);
   expect_no_point_lost(rig.out, in);
   for (const auto& c : rig.out) {
@@ -522,7 +522,7 @@ TEST(PortController, AnInitialCommandThatIsNotFiniteOrOutsideTheLimitsSendsNothi
   for (const double bad : {std::nan(""), 0.0, 1e30}) {
     Rig<StewartM> rig(stewart_calibrated(), stewart_nominal());
     rig.config.has_initial_command = true;
-    ASSERT_EQ(Compensator<StewartM>(stewart_nominal()).home_command(rig.config.initial_command), CS::Ok);
+    ASSERT_EQ(Compensator<StewartM>(stewart_nominal(), trust_table_bounds).home_command(rig.config.initial_command), CS::Ok);
     rig.config.initial_command(3) = bad;
     expect_nothing_sent(rig, stewart_path(5));
   }
@@ -591,7 +591,7 @@ TEST_P(PortControllerRegisterFault, RefusesMotionHoldsAndCounts) {
   EXPECT_EQ(ctl.counters().register_failures, 1u);
   expect_no_point_lost(rig.out, in);
   Vec6<double> home;
-  ASSERT_EQ(Compensator<HybridM>(hybrid_calibrated()).home_command(home), CS::Ok);
+  ASSERT_EQ(Compensator<HybridM>(hybrid_calibrated(), trust_table_bounds).home_command(home), CS::Ok);
   for (const auto& c : rig.out) {
     EXPECT_EQ(c.port, f.status);
     EXPECT_TRUE(c.flags & kCommandHeld);

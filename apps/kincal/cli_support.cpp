@@ -125,8 +125,8 @@ ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::s
   return data;
 }
 
-void kincal_app::warn_correction_need(const ki::CalibrationModel& model, const ki::PoseTable& data) {
-  const std::string w = ki::correction_need_warning(ki::correction_need(model, data));
+void kincal_app::warn_table_refusal(const ki::CalibrationModel& model, const ki::PoseTable& data) {
+  const std::string w = ki::table_refusal_warning(model, data);
   if (!w.empty()) warn(data.file + ": warning: " + w);
 }
 

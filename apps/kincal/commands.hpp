@@ -88,10 +88,12 @@ int run_identify(const IdentifyArgs& args);
 kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& robot, const std::string& path,
                                               bool instrument_frame = false);
 
-// Warns (one line) when the identified model needs corrections above the
-// robot's correction bound on the measured poses (issue #11 item 3), naming
-// the key that raises it.
-void warn_correction_need(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
+// Warns (one line) when `compensate` or `table` would refuse the identified
+// model (issue #31: the table check against every bound of the robot
+// description) or it needs corrections above the robot's correction bound on
+// the measured poses (issue #11 item 3), naming the value, the bound and the
+// robot description key that raises it. The model is written all the same.
+void warn_table_refusal(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
 
 // One warning per measured row the model could not be evaluated at (a test
 // row whose commanded pose is out of reach), at its line.

@@ -28,12 +28,23 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   const ki::Robot robot = ki::load_robot(robot_name);
   const ki::CalibrationModel model = ki::read_model_file(model_path);
   if (ki::robot_to_json(model.nominal) != ki::robot_to_json(robot)) {
-    ki::Robot same_bound = robot;
-    same_bound.max_correction = model.nominal.max_correction;
-    if (ki::robot_to_json(model.nominal) == ki::robot_to_json(same_bound))
+    // Only the bounds differ: the model carries its robot's bounds into the
+    // table, so name the keys rather than call it another robot.
+    ki::Robot same_bounds = robot;
+    std::string keys;
+    auto bound = [&](const char* key, auto member) {
+      if (same_bounds.*member != model.nominal.*member) keys += (keys.empty() ? "'" : ", '") + std::string(key) + "'";
+      same_bounds.*member = model.nominal.*member;
+    };
+    bound("max_correction", &ki::Robot::max_correction);
+    bound("max_geometry_error", &ki::Robot::max_geometry_error);
+    bound("max_angle_error", &ki::Robot::max_angle_error);
+    bound("max_scale", &ki::Robot::max_scale);
+    bound("max_thermal", &ki::Robot::max_thermal);
+    if (ki::robot_to_json(model.nominal) == ki::robot_to_json(same_bounds))
       throw ki::InputError(model_path, 0, 0,
-                           "was identified with another 'max_correction' than " + robot_name +
-                               " has; the model carries the bound into the table: identify again with " + robot_name);
+                           "was identified with another " + keys + " than " + robot_name +
+                               " has; the model carries the bounds into the table: identify again with " + robot_name);
     throw ki::InputError(model_path, 0, 0,
                          "was identified on robot '" + model.nominal.name + "', not on " + robot_name);
   }

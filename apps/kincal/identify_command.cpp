@@ -268,7 +268,7 @@ int run_identify_hybrid_gauge(const IdentifyArgs& a, const ki::Robot& robot, con
   const ki::PoseErrorReport before = ki::hybrid_residuals(robot, nullptr, data);
   const ki::PoseErrorReport after = ki::hybrid_residuals(robot, &comp, data);
   print_residuals(a, before, after, "pose error from the gauge, measured - nominal model");
-  kincal_app::warn_correction_need(model, data);
+  kincal_app::warn_table_refusal(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   nlohmann::json summary = summary_start(a, robot);
@@ -356,7 +356,7 @@ int run_identify_targets(const IdentifyArgs& a, const ki::Robot& robot, const ki
     std::cout << "  target t" << k + 1 << " on the " << robot.target_body() << ": "
               << used.targets[k].transpose() << " mm (sd "
               << 1e3 * used.target_standard_error[k].transpose() << " um)\n";
-  kincal_app::warn_correction_need(model, data);
+  kincal_app::warn_table_refusal(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   const kincal::Pose<double> nominal_registration =
@@ -437,7 +437,7 @@ int run_identify_stewart(const IdentifyArgs& a, const ki::Robot& robot) {
               << 1e3 * c.history.back().rms_position_mm << " um)\n";
   const ki::StewartCalibration& used = screen.excluded ? search.rest : c;
   const ki::CalibrationModel model = ki::stewart_model(robot, used, a.data);
-  kincal_app::warn_correction_need(model, data);
+  kincal_app::warn_table_refusal(model, data);
   ki::OutputFiles outputs(identify_inputs(a));
   outputs.add(a.out, ki::model_to_json(model));
   const ki::PoseErrorReport before = ki::stewart_residuals(robot, robot, data);

@@ -55,7 +55,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   if (screen.excluded)
     std::cout << "  without them: cal residual RMS " << report.rms_cal_um_final << " um (all nodes: "
               << all.report.rms_cal_um_final << " um)\n";
-  warn_correction_need(model, data);
+  warn_table_refusal(model, data);
   for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
     std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
   for (const ki::HeldParameter& h : report.held) {

@@ -32,13 +32,13 @@ inline constexpr ::kincal::MachineLimits<double> kLimits_double = {
     {628.0, 628.0, 628.0, -2.8999999999999999, -1.3999999999999999, -1.3999999999999999},  // min_joint
     {1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999},  // max_joint
     {5.0, 5.0, 5.0, 0.02, 0.02, 0.02},  // max_correction
-    10.0, 0.01, 0.001};  // max_geometry_error, max_scale, max_thermal
+    10.0, 0.01, 0.001, 0.10000000000000001};  // max_geometry_error, max_scale, max_thermal, max_angle_error
 
 inline constexpr ::kincal::MachineLimits<float> kLimits_float = {
     {628.0, 628.0, 628.0, -2.9000000953674316, -1.3999999761581421, -1.3999999761581421},  // min_joint
     {1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421},  // max_joint
     {5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164},  // max_correction
-    10.0, 0.0099999997764825821, 0.0010000000474974513};  // max_geometry_error, max_scale, max_thermal
+    10.0, 0.0099999997764825821, 0.0010000000474974513, 0.10000000149011612};  // max_geometry_error, max_scale, max_thermal, max_angle_error
 
 inline constexpr double kCalibrationValues_double[289] = {
     // machine.nominal.base_joints

@@ -16,7 +16,7 @@ using namespace kincal::bench;
 
 template <class Machine, class S = typename Machine::Scalar>
 void run(benchmark::State& state, const CalibrationTable<Machine>& table, bool temperature) {
-  const Compensator<Machine> c(table);
+  const Compensator<Machine> c(table, trust_table_bounds);
   Vec6<S> home = Vec6<S>::Zero();
   c.home_command(home);
   CompensatorState<S> s = c.start(home);

@@ -24,7 +24,7 @@ template <class T> inline __attribute__((always_inline)) void opaque(T& value) {
 
 template <class Machine, class S = typename Machine::Scalar>
 int loop(long n, const CalibrationTable<Machine>& table, bool temperature) {
-  const Compensator<Machine> c(table);
+  const Compensator<Machine> c(table, trust_table_bounds);
   Vec6<S> home = Vec6<S>::Zero();
   c.home_command(home);
   CompensatorState<S> s = c.start(home);

@@ -365,7 +365,7 @@ template <class Scalar> void check_compensation(Checker& c) {
   for (int i = 0; i < 6; ++i) table.machine.encoder_offsets[i] = xi[i];
   seal(table);
   KINCAL_CHECK(c, validate_table(table) == CS::Ok);
-  const HybridCompensator<Scalar> comp(table);
+  const HybridCompensator<Scalar> comp(table, trust_table_bounds);
   HybridGeometry<Scalar> controller = to_core(table.machine.nominal);
   for (int i = 0; i < 6; ++i) controller.joint_offset(i) += xi[i];
   Vec6<Scalar> home, q;

@@ -88,10 +88,24 @@ class DescriptionReader {
     return j;
   }
 
-  // The keys every family may have (screw_lead, max_correction, targets).
+  // The optional keys every family may have, after a family's own optional
+  // keys (for object()'s list of allowed keys).
+  static std::vector<std::string> with_common_optional(std::vector<std::string> keys) {
+    for (const char* k : {"screw_lead", "max_correction", "max_geometry_error", "max_angle_error", "max_scale",
+                          "max_thermal", "targets"})
+      keys.emplace_back(k);
+    return keys;
+  }
+
+  // The keys every family may have (screw_lead, max_correction, the caps of
+  // the table check, targets).
   void common_optional(const nlohmann::json& doc, Robot& robot) const {
     if (doc.contains("screw_lead")) robot.screw_lead = positive(doc["screw_lead"], "/screw_lead");
     if (doc.contains("max_correction")) robot.max_correction = per_joint_positive(doc["max_correction"], "/max_correction");
+    if (doc.contains("max_geometry_error")) robot.max_geometry_error = cap(doc["max_geometry_error"], "/max_geometry_error");
+    if (doc.contains("max_angle_error")) robot.max_angle_error = cap(doc["max_angle_error"], "/max_angle_error");
+    if (doc.contains("max_scale")) robot.max_scale = cap(doc["max_scale"], "/max_scale");
+    if (doc.contains("max_thermal")) robot.max_thermal = cap(doc["max_thermal"], "/max_thermal");
     if (doc.contains("targets")) robot.targets = target_points(doc["targets"], "/targets");
   }
 
@@ -114,6 +128,13 @@ class DescriptionReader {
   double non_negative(const nlohmann::json& j, const std::string& path) const {
     const double v = number(j, path);
     if (v < 0) fail(path, display(path) + " is a length and must not be negative");
+    return v;
+  }
+  // A cap of the table check (core/machine_limits.hpp): a magnitude, so not
+  // negative; 0 allows no error of that kind at all.
+  double cap(const nlohmann::json& j, const std::string& path) const {
+    const double v = number(j, path);
+    if (v < 0) fail(path, display(path) + " is the largest magnitude allowed and must not be negative");
     return v;
   }
   double positive(const nlohmann::json& j, const std::string& path) const {

@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "families/description_reader.hpp"
@@ -162,6 +163,12 @@ std::string robot_to_json(const Robot& robot) {
     else
       j["max_correction"] = detail::vector_json<6>(m);
   }
+  // Only the caps a description set: one without them reads and writes as
+  // before.
+  for (const auto& [key, cap] : {std::pair{"max_geometry_error", &robot.max_geometry_error},
+                                 std::pair{"max_angle_error", &robot.max_angle_error},
+                                 std::pair{"max_scale", &robot.max_scale}, std::pair{"max_thermal", &robot.max_thermal}})
+    if (*cap) j[key] = **cap;
   if (!robot.targets.empty()) {
     nlohmann::ordered_json t = nlohmann::ordered_json::array();
     for (const Vec3<double>& p : robot.targets) t.push_back({p.x(), p.y(), p.z()});

@@ -20,13 +20,34 @@ std::string number(double v) {
   return s.str();
 }
 
-// The first value of `values` (named `name`) whose magnitude is above `cap`.
+// Where the user raises a bound a message names: every bound of the table
+// check is a robot description key (GUIDE "Bounds, per machine").
+std::string key_note(const char* key) { return std::string(" (robot description key '") + key + "')"; }
+
+// The first value of `values` (named `name`) whose magnitude is above the
+// cap of the robot description key `key` (which names the cap too).
 template <std::size_t N>
-std::string above(const char* name, const double (&values)[N], double cap, const char* cap_name, const double* base = nullptr) {
+std::string above(const char* name, const double (&values)[N], double cap, const char* key, const double* base = nullptr) {
   for (std::size_t k = 0; k < N; ++k) {
     const double v = values[k] - (base != nullptr ? base[k] : 0.0);
     if (!(std::abs(v) <= cap))
-      return std::string(name) + "[" + std::to_string(k) + "] = " + number(v) + " above " + cap_name + " " + number(cap);
+      return std::string(name) + "[" + std::to_string(k) + "] = " + number(v) + " above " + key + " " + number(cap) +
+             key_note(key);
+  }
+  return {};
+}
+
+// The hybrid's source errors, each against its own cap: the angles against
+// max_angle_error, the lengths against max_geometry_error (as core's
+// machine_inside).
+std::string source_error_above(const double (&values)[kHybridSourceErrorCount], const MachineLimits<double>& l) {
+  for (int k = 0; k < kHybridSourceErrorCount; ++k) {
+    const bool angle = HybridErrorLayout::angular(k);
+    const double cap = angle ? l.max_angle_error : l.max_geometry_error;
+    const char* key = angle ? "max_angle_error" : "max_geometry_error";
+    if (!(std::abs(values[k]) <= cap))
+      return "machine.source_errors[" + std::to_string(k) + "] = " + number(values[k]) + (angle ? " rad" : " mm") +
+             " above " + key + " " + number(cap) + key_note(key);
   }
   return {};
 }
@@ -38,7 +59,7 @@ template <class Machine> std::string value_violation(const CalibrationTable<Mach
     for (int i = 0; i < 6; ++i)
       if (!(std::abs(t.machine.encoder_offsets[i]) <= t.bounds.max_correction[i]))
         return "encoder offset " + std::to_string(i + 1) + " = " + number(t.machine.encoder_offsets[i]) +
-               " above its correction bound " + number(t.bounds.max_correction[i]);
+               " above its correction bound " + number(t.bounds.max_correction[i]) + key_note("max_correction");
   }
   return "a correction above its bound or a value out of range";
 }
@@ -68,6 +89,11 @@ MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableO
   MachineLimits<double> l = limits_from_bounds(b);
   const Vec6<double> bound = options.max_correction ? *options.max_correction : robot.correction_bound();
   for (int i = 0; i < 6; ++i) l.max_correction[i] = bound(i);
+  // Every cap from the description where it sets one (default: core's).
+  l.max_geometry_error = robot.max_geometry_error.value_or(l.max_geometry_error);
+  l.max_angle_error = robot.max_angle_error.value_or(l.max_angle_error);
+  l.max_scale = robot.max_scale.value_or(l.max_scale);
+  l.max_thermal = robot.max_thermal.value_or(l.max_thermal);
   return l;
 }
 
@@ -75,33 +101,41 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
   return std::visit(
       [&](const auto& t) -> std::string {
         if (validate_table(t, l) != CompensationStatus::TableLimits) return {};
+        if (!limits_detail::sane(l))
+          return "the machine limits are not sane (a cap negative or not finite, a joint range empty, a correction "
+                 "bound not positive)";
+        using M = typename std::decay_t<decltype(t)>::MachineType;
+        const char* range_key = M::family == MachineFamily::Hybrid ? "joint_limits" : "stroke";
         for (int i = 0; i < 6; ++i) {
           const std::string j = "[" + std::to_string(i) + "] ";
           if (!(t.bounds.min_joint[i] >= l.min_joint[i]))
-            return "bounds.min_joint" + j + number(t.bounds.min_joint[i]) + " below the limit " + number(l.min_joint[i]);
+            return "bounds.min_joint" + j + number(t.bounds.min_joint[i]) + " below the limit " +
+                   number(l.min_joint[i]) + key_note(range_key);
           if (!(t.bounds.max_joint[i] <= l.max_joint[i]))
-            return "bounds.max_joint" + j + number(t.bounds.max_joint[i]) + " above the limit " + number(l.max_joint[i]);
+            return "bounds.max_joint" + j + number(t.bounds.max_joint[i]) + " above the limit " +
+                   number(l.max_joint[i]) + key_note(range_key);
           if (!(t.bounds.max_correction[i] <= l.max_correction[i]))
             return "bounds.max_correction" + j + number(t.bounds.max_correction[i]) + " above the limit " +
-                   number(l.max_correction[i]);
+                   number(l.max_correction[i]) + key_note("max_correction");
         }
         std::string why;
         const auto& e = t.effects;
         const double* cap = t.bounds.max_correction;
         for (int i = 0; i < 6 && why.empty(); ++i) {
           const std::string j = "[" + std::to_string(i) + "] = ";
-          if (!(std::abs(e.scale[i]) <= l.max_scale)) why = "effects.scale" + j + number(e.scale[i]) + " above max_scale " + number(l.max_scale);
-          else if (!(std::abs(e.backlash[i]) <= cap[i])) why = "effects.backlash" + j + number(e.backlash[i]) + " above the correction bound " + number(cap[i]);
-          else if (!(std::abs(e.compliance[i]) <= cap[i])) why = "effects.compliance" + j + number(e.compliance[i]) + " above the correction bound " + number(cap[i]);
-          else if (!(std::abs(e.cyclic_sin[i]) <= cap[i])) why = "effects.cyclic_sin" + j + number(e.cyclic_sin[i]) + " above the correction bound " + number(cap[i]);
-          else if (!(std::abs(e.cyclic_cos[i]) <= cap[i])) why = "effects.cyclic_cos" + j + number(e.cyclic_cos[i]) + " above the correction bound " + number(cap[i]);
+          const std::string bound = " above the correction bound " + number(cap[i]) + key_note("max_correction");
+          if (!(std::abs(e.scale[i]) <= l.max_scale)) why = "effects.scale" + j + number(e.scale[i]) + " above max_scale " + number(l.max_scale) + key_note("max_scale");
+          else if (!(std::abs(e.backlash[i]) <= cap[i])) why = "effects.backlash" + j + number(e.backlash[i]) + bound;
+          else if (!(std::abs(e.compliance[i]) <= cap[i])) why = "effects.compliance" + j + number(e.compliance[i]) + bound;
+          else if (!(std::abs(e.cyclic_sin[i]) <= cap[i])) why = "effects.cyclic_sin" + j + number(e.cyclic_sin[i]) + bound;
+          else if (!(std::abs(e.cyclic_cos[i]) <= cap[i])) why = "effects.cyclic_cos" + j + number(e.cyclic_cos[i]) + bound;
         }
         if (!why.empty()) return why;
         if (!(std::abs(e.thermal) <= l.max_thermal))
-          return "effects.thermal = " + number(e.thermal) + " above max_thermal " + number(l.max_thermal);
-        using M = typename std::decay_t<decltype(t)>::MachineType;
+          return "effects.thermal = " + number(e.thermal) + " above max_thermal " + number(l.max_thermal) +
+                 key_note("max_thermal");
         if constexpr (M::family == MachineFamily::Hybrid) {
-          return above("machine.source_errors", t.machine.source_errors, l.max_geometry_error, "max_geometry_error");
+          why = source_error_above(t.machine.source_errors, l);
         } else {
           const auto& m = t.machine;
           why = above("machine.calibrated.base - nominal", m.calibrated.base, l.max_geometry_error, "max_geometry_error",
@@ -113,10 +147,10 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
             const double dl = m.calibrated.length_offset[i] - m.nominal.length_offset[i];
             if (!(std::abs(dl) <= cap[i]))
               why = "leg offset dl" + std::to_string(i + 1) + " = " + number(dl) + " above the correction bound " +
-                    number(cap[i]);
+                    number(cap[i]) + key_note("max_correction");
           }
-          return why;
         }
+        return why;
       },
       any);
 }
@@ -181,7 +215,7 @@ bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& opti
   if (culprit.empty() || at == model.value_positions.end())
     throw InputError(model.source_file, 0, 0,
                      why + (culprit.empty() ? std::string(" (no single value causes it: the values together do)")
-                                            : "; it comes from " + culprit));
+                                            : "; it comes from " + culprit + " = " + number(value)));
   throw InputError(model.source_file, at->second.line, at->second.column,
                    why + "; it comes from " + culprit + " = " + number(value));
 }
@@ -219,12 +253,15 @@ HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& 
 }
 
 CompensatedStream compensate_rows(const AnyCalibrationTable& table, const CalibrationModel& model,
-                                  const PoseTable& poses) {
+                                  const PoseTable& poses, const CalibrationTableOptions& options) {
   CompensatedStream out;
   out.rows.reserve(poses.rows.size());
+  // The limits the table was checked against (calibration_table): every cap
+  // of the robot description, not only the table's own bounds.
+  const MachineLimits<double> limits = machine_limits(model.nominal, options);
   std::visit(
       [&](const auto& t) {
-        Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t);
+        Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t, limits);
         if (compensator.status() != CompensationStatus::Ok)
           throw InputError(std::string("calibration table: ") + to_string(compensator.status()));
         // A registered user joint effect's code (its numbers are in the table).
@@ -264,7 +301,7 @@ CorrectionNeed correction_need(const CalibrationModel& model, const PoseTable& p
   CalibrationTableOptions open;
   open.max_correction = Vec6<double>::Constant(1e6);
   try {
-    const CompensatedStream s = compensate_rows(calibration_table(model, open), model, poses);
+    const CompensatedStream s = compensate_rows(calibration_table(model, open), model, poses, open);
     for (std::size_t k = 0; k < poses.rows.size(); ++k) {
       if (s.rows[k].status != CompensationStatus::Ok) continue;
       Vec6<double> q_nominal;
@@ -290,6 +327,24 @@ std::string correction_need_warning(const CorrectionNeed& need) {
          std::to_string(need.poses) + " poses: " + joints +
          "); compensate and table will refuse those poses: raise the robot description's key 'max_correction' "
          "(one number or one per joint, mm or rad)";
+}
+
+std::string table_refusal_warning(const CalibrationModel& model, const PoseTable& poses) {
+  // The check `compensate` and `table` apply, on the robot description's own
+  // bounds: a refusal names the value, its bound and the key (limit_violation,
+  // value_violation) and, through throw_table_fault, the model value it
+  // comes from.
+  const CorrectionNeed need = correction_need(model, poses);
+  try {
+    calibration_table(model);
+  } catch (const InputError& e) {
+    std::string w = "the model is written, but compensate and table will refuse it: " + e.message();
+    // Refused for the correction bound alone: how much each joint needs is
+    // what the user sets 'max_correction' to.
+    if (need.problem.empty() && need.exceeds()) w += "; " + correction_need_warning(need);
+    return w;
+  }
+  return correction_need_warning(need);
 }
 
 }  // namespace kincal::identify

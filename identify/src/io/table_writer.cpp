@@ -111,7 +111,8 @@ void emit_limits(std::ostream& out, const MachineLimits<Scalar>& l, const std::s
       << "    " << row(l.max_joint) << ",  // max_joint\n"
       << "    " << row(l.max_correction) << ",  // max_correction\n"
       << "    " << number(double(l.max_geometry_error)) << ", " << number(double(l.max_scale)) << ", "
-      << number(double(l.max_thermal)) << "};  // max_geometry_error, max_scale, max_thermal\n\n";
+      << number(double(l.max_thermal)) << ", " << number(double(l.max_angle_error))
+      << "};  // max_geometry_error, max_scale, max_thermal, max_angle_error\n\n";
 }
 
 // One table as a value array, a CRC constant and the constexpr table.
@@ -205,6 +206,7 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
   limits_f.max_geometry_error = float(limits.max_geometry_error);
   limits_f.max_scale = float(limits.max_scale);
   limits_f.max_thermal = float(limits.max_thermal);
+  limits_f.max_angle_error = float(limits.max_angle_error);
   for (const CompensationStatus st : {validate_table(table, limits), validate_table(nominal, limits),
                                       validate_table(table_f, limits_f), validate_table(nominal_f, limits_f)})
     if (st != CompensationStatus::Ok)

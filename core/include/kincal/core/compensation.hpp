@@ -207,6 +207,19 @@ template <class S> struct Model<HybridMachine<S>> {
 
 }  // namespace compensation_detail
 
+// The tag of Compensator's trusting form, Compensator(table,
+// trust_table_bounds): the table's own bounds serve as the machine's limits,
+// with the default caps (limits_from_bounds). A table checked against itself
+// proves nothing about the machine, so this form is for host tools that built
+// the table from a robot description they trust, never a firmware's choice by
+// accident: there is no one-argument constructor, and the tag's explicit
+// default constructor makes `Compensator(table, {})` ambiguous, so that does
+// not compile either.
+struct TrustTableBounds {
+  explicit constexpr TrustTableBounds() = default;
+};
+inline constexpr TrustTableBounds trust_table_bounds{};
+
 template <class Machine> class Compensator {
  public:
   using Scalar = typename Machine::Scalar;
@@ -224,12 +237,13 @@ template <class Machine> class Compensator {
   //
   // `limits` are the machine's limits known apart from the table
   // (machine_limits.hpp): the table is refused (TableLimits) unless its
-  // bounds, corrections and effect values lie inside them. Without them, the
-  // table's own bounds serve (host tools that built the table from a robot
-  // file they trust).
-  explicit Compensator(const Table&& table) = delete;
+  // bounds, corrections and effect values lie inside them. With
+  // `trust_table_bounds` instead, the table's own bounds serve (host tools
+  // that built the table from a robot description they trust; see
+  // TrustTableBounds).
+  Compensator(const Table&& table, TrustTableBounds) = delete;
   Compensator(const Table&& table, const MachineLimits<Scalar>& limits) = delete;
-  explicit Compensator(const Table& table) : Compensator(table, limits_from_bounds(table.bounds)) {}
+  Compensator(const Table& table, TrustTableBounds) : Compensator(table, limits_from_bounds(table.bounds)) {}
   Compensator(const Table& table, const MachineLimits<Scalar>& limits)
       : table_(&table), status_(validate_table(table, limits)) {
     if (status_ != CompensationStatus::Ok) return;

@@ -58,6 +58,21 @@ struct HybridErrorLayout {
   static constexpr int up() { return kEncoders + 3 * kUpsCount; }
   static constexpr int wrist() { return up() + kUpCount; }
   static constexpr int size() { return wrist() + kWristCount; }
+  // Whether entry k is an angle (rad) rather than a length (mm), as identify's
+  // HybridErrorParameter::angular() (a host test compares all 150): the wrist's
+  // three encoder offsets (entries 3..5); in every error frame its Δα, Δβ, Δγ
+  // in the component order of the file comment — frame 0 of a limb has all
+  // six (x y z α β γ), a revolute frame x y z α β, the prismatic frame 3 of a
+  // limb x y α β γ. The UP limb's four frames are laid out as a UPS limb's
+  // first four, the wrist's three are revolute.
+  static constexpr bool angular(int k) {
+    if (k < kEncoders) return k >= 3;
+    if (k >= wrist()) return (k - wrist()) % 5 >= 3;
+    const int e = k < up() ? (k - kEncoders) % kUpsCount : k - up();  // entry within its limb
+    if (e < 6) return e >= 3;
+    const int frame = 1 + (e - 6) / 5, c = (e - 6) % 5;
+    return frame == 3 ? c >= 2 : c >= 3;
+  }
 };
 static_assert(HybridErrorLayout::size() == 150, "seed 000 Eq. (7): 150 source errors");
 

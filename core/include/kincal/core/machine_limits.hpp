@@ -14,6 +14,7 @@
 #pragma once
 
 #include "kincal/core/calibration_table.hpp"
+#include "kincal/core/hybrid_error_twist.hpp"  // HybridErrorLayout::angular
 
 namespace kincal {
 
@@ -21,24 +22,34 @@ template <class Scalar> struct MachineLimits {
   Scalar min_joint[6];       // the drives' physical command range, mm / rad
   Scalar max_joint[6];
   Scalar max_correction[6];  // the largest |q − q_nominal| a table may allow, per joint
-  // The largest identified geometric error: 6-UPS |calibrated − nominal| per
-  // B_i / P_i coordinate (mm); hybrid |Δχ̂_k| per structural source error
-  // (mm for lengths, rad for angles: one sanity cap for both, so choose it
-  // for the lengths; the angles are bounded further by the compensation's
-  // 0.1 rad small-rotation check and max_correction).
+  // The largest identified geometric error in length: 6-UPS |calibrated −
+  // nominal| per B_i / P_i coordinate, hybrid |Δχ̂_k| per structural source
+  // error that is a length (HybridErrorLayout::angular), mm.
   Scalar max_geometry_error;
   Scalar max_scale;    // |s_i|, dimensionless
   Scalar max_thermal;  // |c|, 1/°C
+  // The largest identified angular error: hybrid |Δχ̂_k| per structural source
+  // error that is an angle, rad (the 6-UPS has none). Last, so that a
+  // generated header written before it still initializes the members above in
+  // place; it then reads 0 here, which refuses every non-zero angular error:
+  // such a header fails its static_assert (regenerate it) instead of passing
+  // an angle unchecked.
+  Scalar max_angle_error;
 };
 using MachineLimitsd = MachineLimits<double>;
 using MachineLimitsf = MachineLimits<float>;
 
 // Sane maxima that no calibration of a machine of these sizes needs: 10 mm of
 // geometric error (seed 001 Table 3 and seed 000 Table 3 are < 1 mm; a
-// machine before its first calibration a few mm), scale 1 % (a leadscrew is
-// off by 1e-4), thermal 1e-3 /°C (steel 1.2e-5, aluminium 2.3e-5).
+// machine before its first calibration a few mm), 0.1 rad of angular error
+// (seed 000 Table 3 is < 1 mrad; the compensation's small_rotation refuses
+// a predicted error twist above 0.1 rad anyway), scale 1 % (a leadscrew is
+// off by 1e-4), thermal 1e-3 /°C (steel 1.2e-5, aluminium 2.3e-5). A robot
+// description may set each (identify's machine_limits: the keys
+// max_geometry_error, max_angle_error, max_scale, max_thermal).
 template <class Scalar> struct DefaultLimitCaps {
   static constexpr Scalar geometry_error = Scalar(10);
+  static constexpr Scalar angle_error = Scalar(0.1);
   static constexpr Scalar scale = Scalar(0.01);
   static constexpr Scalar thermal = Scalar(1e-3);
 };
@@ -54,6 +65,7 @@ template <class Scalar> MachineLimits<Scalar> limits_from_bounds(const TableBoun
     l.max_correction[i] = b.max_correction[i];
   }
   l.max_geometry_error = DefaultLimitCaps<Scalar>::geometry_error;
+  l.max_angle_error = DefaultLimitCaps<Scalar>::angle_error;
   l.max_scale = DefaultLimitCaps<Scalar>::scale;
   l.max_thermal = DefaultLimitCaps<Scalar>::thermal;
   return l;
@@ -71,8 +83,9 @@ template <class Scalar> constexpr bool sane(const MachineLimits<Scalar>& l) {
     if (!finite(l.min_joint[i]) || !finite(l.max_joint[i]) || !(l.min_joint[i] < l.max_joint[i]) ||
         !finite(l.max_correction[i]) || !(l.max_correction[i] > Scalar(0)))
       return false;
-  return finite(l.max_geometry_error) && l.max_geometry_error >= Scalar(0) && finite(l.max_scale) &&
-         l.max_scale >= Scalar(0) && finite(l.max_thermal) && l.max_thermal >= Scalar(0);
+  return finite(l.max_geometry_error) && l.max_geometry_error >= Scalar(0) && finite(l.max_angle_error) &&
+         l.max_angle_error >= Scalar(0) && finite(l.max_scale) && l.max_scale >= Scalar(0) &&
+         finite(l.max_thermal) && l.max_thermal >= Scalar(0);
 }
 
 template <class Scalar> constexpr bool bounds_inside(const TableBounds<Scalar>& b, const MachineLimits<Scalar>& l) {
@@ -112,8 +125,10 @@ constexpr bool machine_inside(const StewartMachine<Scalar>& m, const TableBounds
 
 template <class Scalar>
 constexpr bool machine_inside(const HybridMachine<Scalar>& m, const TableBounds<Scalar>&, const MachineLimits<Scalar>& l) {
+  static_assert(HybridErrorLayout::size() == kHybridSourceErrorCount, "one layout of Δχ");
   for (int k = 0; k < kHybridSourceErrorCount; ++k)
-    if (!within(m.source_errors[k], l.max_geometry_error)) return false;
+    if (!within(m.source_errors[k], HybridErrorLayout::angular(k) ? l.max_angle_error : l.max_geometry_error))
+      return false;
   return true;  // encoder offsets: validate_table bounds them by max_correction
 }
 
@@ -123,7 +138,8 @@ constexpr bool machine_inside(const HybridMachine<Scalar>& m, const TableBounds<
 //   TableLimits  the limits themselves are not sane (non-finite, unordered,
 //                a correction bound ≤ 0); the table's command range is not
 //                inside the limits' or its correction bound above theirs; a
-//                geometric error above max_geometry_error, a 6-UPS leg offset
+//                geometric error above max_geometry_error (lengths) or
+//                max_angle_error (the hybrid's angles), a 6-UPS leg offset
 //                above the correction bound; an effect value above its cap
 //                (scale, thermal) or above the correction bound (backlash,
 //                compliance, cyclic).

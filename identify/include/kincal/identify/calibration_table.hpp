@@ -35,14 +35,19 @@ struct CalibrationTableOptions {
 using AnyCalibrationTable = std::variant<StewartCalibrationTable<double>, HybridCalibrationTable<double>>;
 
 // The machine limits of a robot description (core/machine_limits.hpp): its
-// stroke / joint limits as the drives' range, the correction bound (options
-// or core's default_bounds) and the default caps. From the NOMINAL robot only,
-// never from identified values: what the firmware checks a table against.
+// stroke / joint limits as the drives' range, the correction bound (options,
+// else the description's `max_correction`, else core's default_bounds) and
+// the caps (the description's `max_geometry_error`, `max_angle_error`,
+// `max_scale`, `max_thermal`, else core's DefaultLimitCaps). From the NOMINAL
+// robot only, never from identified values: what the firmware checks a table
+// against.
 MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options = {});
 
-// Why a table is outside the limits, naming the first offending value
-// ("machine.source_errors[37] = 1e+06 above max_geometry_error 10"), or "" if
-// validate_table(table, limits) is Ok or fails for another reason.
+// Why a table is outside the limits, naming the first offending value, its
+// bound and the robot description key that sets the bound
+// ("machine.source_errors[37] = 0.15 rad above max_angle_error 0.1 (robot
+// description key 'max_angle_error')"), or "" if validate_table(table,
+// limits) is Ok or fails for another reason.
 std::string limit_violation(const AnyCalibrationTable& table, const MachineLimits<double>& limits);
 
 // Sealed (CRC set) tables that pass validate_table against machine_limits of
@@ -57,7 +62,8 @@ HybridCalibrationTable<double> hybrid_calibration_table(const CalibrationModel& 
 AnyCalibrationTable calibration_table(const CalibrationModel& model, const CalibrationTableOptions& options = {});
 
 // The controller's routine run over a pose file as the firmware runs an NC
-// stream: Compensator(table) from the home command (approach directions +1),
+// stream: Compensator(table, machine_limits(model.nominal, options)) from the
+// home command (approach directions +1),
 // each row's pose with its temperature and approach directions where given.
 // One status and command per row (q valid where the status is Ok).
 struct CompensatedRow {
@@ -70,7 +76,7 @@ struct CompensatedStream {
 };
 // Throws InputError if the table is refused by the Compensator (its status named).
 CompensatedStream compensate_rows(const AnyCalibrationTable& table, const CalibrationModel& model,
-                                  const PoseTable& poses);
+                                  const PoseTable& poses, const CalibrationTableOptions& options = {});
 
 // What an identified model asks of the correction bound (issue #11 item 3):
 // per joint, the largest |compensated command − nominal IK| over the poses
@@ -87,5 +93,14 @@ CorrectionNeed correction_need(const CalibrationModel& model, const PoseTable& p
 // "" when the need is within the bound; else one line naming the joints, by
 // how much, and the robot description key that raises the bound.
 std::string correction_need_warning(const CorrectionNeed& need);
+
+// "" when `compensate` and `table` accept the model on its robot description
+// (model.nominal) and its corrections on `poses` fit the correction bound;
+// else one line naming the value, the bound and the robot description key
+// that raises it (issue #31): the table check's refusal (limit_violation:
+// max_geometry_error, max_angle_error, max_scale, max_thermal,
+// max_correction) first — followed by the correction need when the bound
+// alone refuses it — else the correction need (correction_need_warning).
+std::string table_refusal_warning(const CalibrationModel& model, const PoseTable& poses);
 
 }  // namespace kincal::identify

@@ -59,6 +59,16 @@ struct Robot {
   // `max_correction`. Unset = core's default_bounds (5 mm, 0.02 rad). A
   // machine before its first calibration may need more (issue #11 item 3).
   std::optional<Vec6<double>> max_correction;
+  // The optional description keys capping the identified values a table may
+  // carry (core/machine_limits.hpp, the table check `compensate` and `table`
+  // apply): max_geometry_error (mm: 6-UPS joint centres, the hybrid's length
+  // source errors), max_angle_error (rad: the hybrid's angular source
+  // errors), max_scale (dimensionless), max_thermal (1/°C). Unset = core's
+  // DefaultLimitCaps (10 mm, 0.1 rad, 0.01, 1e-3).
+  std::optional<double> max_geometry_error;
+  std::optional<double> max_angle_error;
+  std::optional<double> max_scale;
+  std::optional<double> max_thermal;
   // The optional description key `targets`: 1–3 nominal positions [x, y, z]
   // of tracker targets (SMRs) on the platform (6-UPS, platform frame) or the
   // tool (hybrid, tool frame), mm. Empty = none given; the hybrid is then

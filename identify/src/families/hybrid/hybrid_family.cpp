@@ -64,7 +64,7 @@ Robot HybridFamily::parse(const nlohmann::json& doc, const detail::DescriptionRe
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "platform_to_wrist",
             "wrist_link", "tool_length", "beta", "reference_extension", "joint_limits", "extension_limits"},
-           {"joint_offset", "gauge_radius", "screw_lead", "max_correction", "targets"});
+           r.with_common_optional({"joint_offset", "gauge_radius"}));
   Robot robot;
   HybridDesign d;
   d.base_joints = r.points<3>(doc["base_joints"], "/base_joints");

@@ -12,7 +12,7 @@ namespace kincal::identify {
 Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
-           {"length_offset", "screw_lead", "max_correction", "targets"});
+           r.with_common_optional({"length_offset"}));
   Robot robot;
   StewartGeometry<double> g;
   g.base = r.points<6>(doc["base_joints"], "/base_joints");
