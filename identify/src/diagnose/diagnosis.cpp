@@ -36,6 +36,7 @@
 #include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/input_error.hpp"
+#include "kincal/identify/noise_estimate.hpp"
 #include "kincal/identify/simulate.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
 
@@ -220,6 +221,42 @@ std::optional<NeighbourNoise> neighbour_noise(const PoseTable& data, const BaseM
   return NeighbourNoise{in_space, "estimated from neighbouring nodes in the workspace"};
 }
 
+// The cal nodes' places in joint space — each commanded joint over its
+// stroke from the robot's limits (the data's range where a limit is missing)
+// — and their residual coordinates of one kind (`residual`: per cal node, in
+// the order of base.nodes; empty: the base residual).
+NoiseData joint_space_noise_data(const Robot& robot, const BaseModel& base, bool orientation, bool all_kinds,
+                                 const std::vector<VectorXd>& residual = {}) {
+  Vec6<double> lo, hi;
+  robot.joint_limits(lo, hi);
+  Vec6<double> dmin = Vec6<double>::Constant(HUGE_VAL), dmax = Vec6<double>::Constant(-HUGE_VAL);
+  for (const NodeData& n : base.nodes) dmin = dmin.cwiseMin(n.effect.q), dmax = dmax.cwiseMax(n.effect.q);
+  Vec6<double> stroke;
+  for (int j = 0; j < 6; ++j) {
+    stroke(j) = hi(j) - lo(j);
+    if (!(std::isfinite(stroke(j)) && stroke(j) > 0)) stroke(j) = dmax(j) - dmin(j);
+  }
+  NoiseData out;
+  Index rows = 0;
+  std::size_t c = 0;
+  for (const NodeData& n : base.nodes) {
+    if (n.test) continue;
+    rows += n.r.size();
+    VectorXd u(6);
+    for (int j = 0; j < 6; ++j) u(j) = stroke(j) > 0 ? n.effect.q(j) / stroke(j) : 0.0;
+    const VectorXd& r = residual.empty() ? n.r : residual[c];
+    ++c;
+    std::vector<double> v;
+    for (Index i = 0; i < r.size(); ++i)
+      if (all_kinds || in_kind(n, i, orientation)) v.push_back(r(i));
+    if (v.empty()) continue;
+    out.place.push_back(u);
+    out.residual.push_back(Eigen::Map<const VectorXd>(v.data(), Index(v.size())));
+  }
+  out.leverage = rows > 0 ? double(base.parameters) / double(rows) : 0.0;
+  return out;
+}
+
 // Rows of one kind scaled by `factor` (residual, measurement map, design):
 // the 6-UPS's orientation rows brought to the position noise, so one σ holds
 // for every row of the stacked problem.
@@ -317,9 +354,10 @@ class DiagnosisRun {
     fit_base_columns();
     stepwise_search();
     rank_candidates();
+    name_collinear_candidates();
     read_accepted_values();
-    judge();
     residual_per_node();
+    judge();
     prepare_groups();
     by_layer();
     by_region();
@@ -348,7 +386,16 @@ class DiagnosisRun {
   void rank_candidates();
   void read_accepted_values();
   void judge();
+  std::vector<VectorXd> final_cal_residuals() const;
   void residual_per_node();
+  // The implied joint-j residual binned along q_j (per-joint hotspot test).
+  struct JointFinding {
+    int joint = 0;
+    double chi2 = 0, dof = 0, p = 1;
+    double lo = 0, hi = 0, peak = 0;
+  };
+  JointFinding joint_finding(int j) const;
+  void name_collinear_candidates();
   void prepare_groups();
   ResidualGroup group(const std::string& label, const std::vector<std::size_t>& members, double* excess = nullptr) const;
   void by_layer();
@@ -375,6 +422,7 @@ class DiagnosisRun {
   FitResult base_fit;
   double sigma_mm = 0;
   bool noise_known = false;
+  bool noise_estimated = false;  // neither given nor from repeated nodes
   // The stepwise search's state: the accepted effects, the fit with them,
   // each candidate's latest test, and the effect values the current
   // linearisation starts from (re-linearised steps; the final fit's
@@ -420,23 +468,39 @@ void DiagnosisRun::set_noise() {
   // --noise-um, else repeated nodes, else neighbouring nodes; a 6-UPS's
   // orientations likewise from --noise-urad. The orientation rows are then
   // scaled so that one σ (the position's) holds for every row.
-  auto estimate = [&](bool orientation, std::string& source) -> double {
+  // Estimated (#31): local-linear pseudo-residuals over joint-space
+  // neighbours (noise_estimate.hpp), with its trust test; the plain
+  // workspace / motion-order differences of before are kept for comparison
+  // (NoiseEstimates::workspace): a misfit that follows the joints inflates them.
+  auto estimate = [&](bool orientation, std::string& source, NoiseEstimates& record) -> double {
     if (const auto rep = repeated_node_noise(data, base, orientation)) {
       source = "repeated nodes";
       return *rep;
     }
-    if (const auto nb = neighbour_noise(data, base, orientation)) {
-      source = nb->how;
-      return nb->sigma;
+    const double unit = orientation ? 1e6 / detail::kOrientationWeightMm : kMicro;
+    if (const auto nb = neighbour_noise(data, base, orientation)) record.workspace = nb->sigma * unit;
+    const NoiseEstimate e = estimate_noise_in_joint_space(joint_space_noise_data(robot, base, orientation, false));
+    record.joint_space = e.sigma * unit;
+    record.joint_space_wide = e.sigma_wide * unit;
+    record.joint_space_pairs = e.sigma_pairs * unit;
+    record.spacing = e.spacing;
+    if (!e.trusted) {
+      d.noise_trusted = false;
+      const std::string option = orientation ? "--noise-urad" : "--noise-um";
+      const std::string why = std::string(orientation ? "orientation" : "position") + " noise unknown: " + e.why_not +
+                              "; give it with " + option + " (or measure some poses twice)";
+      d.noise_untrusted += (d.noise_untrusted.empty() ? "" : "; ") + why;
     }
-    source = "unknown (too few nodes to estimate it)";
-    return 0.0;
+    noise_estimated = true;
+    source = e.sigma > 0 ? "estimated from neighbouring nodes in joint space" + std::string(e.trusted ? "" : " (not trusted)")
+                         : "unknown (too few nodes to estimate it)";
+    return e.sigma;
   };
   if (options.noise_um) {
     d.noise_um = *options.noise_um;
     d.noise_source = "given";
   } else {
-    d.noise_um = estimate(false, d.noise_source) * kMicro;
+    d.noise_um = estimate(false, d.noise_source, d.position_estimates) * kMicro;
   }
   orientation_factor = 1.0;
   const bool measures_orientation =
@@ -451,7 +515,7 @@ void DiagnosisRun::set_noise() {
       d.noise_urad = *options.noise_um / detail::kOrientationWeightMm * 1e3;
       d.noise_urad_source = "as the position noise at 200 mm (give --noise-urad if it differs)";
     } else {
-      d.noise_urad = estimate(true, d.noise_urad_source) / detail::kOrientationWeightMm * 1e6;
+      d.noise_urad = estimate(true, d.noise_urad_source, d.orientation_estimates) / detail::kOrientationWeightMm * 1e6;
     }
     if (d.noise_urad > 0 && d.noise_um > 0)
       orientation_factor = (d.noise_um / kMicro) / (d.noise_urad * 1e-6 * detail::kOrientationWeightMm);
@@ -706,6 +770,56 @@ void DiagnosisRun::rank_candidates() {
   d.ranking = ranked;
 }
 
+// Candidates nearly collinear with each other (#31): `confounded` measures
+// an effect against the base; two effects can each stand out from the base
+// and still be one another's image (the hybrid's wrist scale and compliance),
+// and then the one accepted may stand for the other. Each effect's columns
+// are orthogonalised against the base design; the mean share of one's
+// (unit) columns inside the span of the other's is the measure, both ways.
+void DiagnosisRun::name_collinear_candidates() {
+  constexpr double kCollinear = 0.9;
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(cal.H);
+  const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(qr.rank());
+  std::vector<std::pair<std::string, MatrixXd>> beyond;  // each effect's columns beyond the base, unit norm
+  for (const Effect* e : candidates) {
+    const MatrixXd& G = cal.G.at(e->name());
+    MatrixXd R = G - Q * (Q.transpose() * G);
+    std::vector<Index> keep;
+    for (Index j = 0; j < R.cols(); ++j)
+      if (R.col(j).norm() > 1e-8 * std::max(1e-300, G.col(j).norm())) keep.push_back(j);
+    if (keep.empty()) continue;
+    MatrixXd U(R.rows(), Index(keep.size()));
+    for (std::size_t j = 0; j < keep.size(); ++j) U.col(Index(j)) = R.col(keep[j]).normalized();
+    beyond.emplace_back(e->name(), std::move(U));
+  }
+  auto share = [](const MatrixXd& A, const MatrixXd& B) {
+    const Eigen::ColPivHouseholderQR<MatrixXd> qb(B);
+    const MatrixXd QB = MatrixXd(qb.householderQ()).leftCols(qb.rank());
+    return (QB.transpose() * A).colwise().squaredNorm().mean();  // columns of A are unit
+  };
+  for (std::size_t a = 0; a < beyond.size(); ++a)
+    for (std::size_t b = a + 1; b < beyond.size(); ++b) {
+      const double ab = share(beyond[a].second, beyond[b].second), ba = share(beyond[b].second, beyond[a].second);
+      if (std::max(ab, ba) < kCollinear) continue;
+      CollinearPair c = ab >= ba ? CollinearPair{beyond[a].first, beyond[b].first, ab}
+                                 : CollinearPair{beyond[b].first, beyond[a].first, ba};
+      char pct[32];
+      std::snprintf(pct, sizeof pct, "%.1f %%", 100 * c.share);
+      auto is_accepted = [&](const std::string& x) {
+        return std::find(accepted.begin(), accepted.end(), x) != accepted.end();
+      };
+      std::string which;
+      if (is_accepted(c.first) != is_accepted(c.second))
+        which = " (" + (is_accepted(c.first) ? c.first : c.second) + " was accepted: it may stand for " +
+                (is_accepted(c.first) ? c.second : c.first) + ")";
+      d.notes.push_back("candidates " + c.first + " and " + c.second +
+                        " are nearly collinear with each other: beyond the base model, " + pct + " of " + c.first +
+                        "'s columns lie in the span of " + c.second + "'s, so these data can hardly tell them apart" +
+                        which + "; kincal plan --effects " + c.first + "," + c.second + " plans poses that separate them");
+      d.collinear.push_back(std::move(c));
+    }
+}
+
 void DiagnosisRun::read_accepted_values() {
   // Accepted effect values from the final fit.
   Index c = base.parameters;
@@ -720,25 +834,83 @@ void DiagnosisRun::read_accepted_values() {
   }
 }
 
+std::vector<VectorXd> DiagnosisRun::final_cal_residuals() const {
+  std::vector<VectorXd> out;
+  Index r = 0;
+  for (const std::size_t k : cal.node) {
+    const Index len = base.nodes[k].r.size();
+    out.push_back(current.r_cal.segment(r, len));
+    r += len;
+  }
+  return out;
+}
+
 void DiagnosisRun::judge() {
   // Verdict.
   // GUIDE: "explained" = the accepted effects bring the held-out residuals to
   // the noise level; with no test rows the cal residual decides.
+  const std::vector<VectorXd> final_r = final_cal_residuals();
+  const NoiseData final_data = joint_space_noise_data(robot, base, false, true, final_r);
+  // An estimated noise the base residual could not vouch for (its structure
+  // did not cancel between neighbours) may be told by the final model's
+  // residual, once the accepted effects have taken that structure out; the
+  // rows of a 6-UPS's two kinds are at one σ by now.
+  if (noise_estimated && !d.noise_trusted && !accepted.empty()) {
+    const NoiseEstimate e = estimate_noise_in_joint_space(final_data);
+    if (e.trusted) {
+      const double factor = e.sigma / std::max(1e-300, sigma_mm);
+      sigma_mm = e.sigma;
+      noise_known = true;
+      d.noise_um *= factor;
+      d.noise_urad *= factor;
+      d.noise_trusted = true;
+      d.noise_untrusted.clear();
+      d.noise_source = "estimated from neighbouring nodes in joint space, on the final model's residual";
+      if (!d.noise_urad_source.empty()) d.noise_urad_source = d.noise_source;
+    }
+  }
+  // Structure left in the final residual, σ-free: neighbours in joint space
+  // more alike than random nodes; with a trusted noise, also the per-joint
+  // test of the implied joint residual along each stroke (Bonferroni over the
+  // joints). Either forbids `consistent` and `explained`.
+  const StructureTest st = joint_space_structure(final_data);
+  d.structure_ratio = st.ratio;
+  d.structure_p = st.p;
+  bool structure = st.p < options.alpha;
+  std::string structure_why;
+  if (structure)
+    structure_why = "the final residual is more alike at neighbouring nodes in joint space than at random nodes "
+                    "(ratio " + fmt(st.ratio) + ", p = " + fmt(st.p) + ")";
+  const bool trusted = noise_known && d.noise_trusted;
+  if (trusted && std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
+    for (int j = 0; j < 6; ++j) {
+      const JointFinding f = joint_finding(j);
+      if (f.p < options.alpha / 6.0) {
+        if (!structure_why.empty()) structure_why += "; ";
+        structure_why += "the implied joint-" + std::to_string(j + 1) + " residual varies along its stroke (p = " +
+                         fmt(f.p) + ")";
+        structure = true;
+        break;
+      }
+    }
+  }
   auto held_out_at_noise = [&](const FitResult& f) {
     if (f.r_test.size() == 0) return consistent(f);
     return consistent_rms(0.0, f.rank, f.r_test.squaredNorm(), f.r_test.size());
   };
-  const bool final_consistent = noise_known ? (accepted.empty() ? consistent(current) : held_out_at_noise(current)) : true;
-  if (noise_known) {
-    if (accepted.empty() && final_consistent)
-      d.verdict = "consistent";
-    else if (final_consistent)
-      d.verdict = "explained";
+  if (!trusted) {
+    d.verdict = structure ? "unexplained" : "noise-unknown";
+    d.notes.push_back(d.noise_untrusted.empty()
+                          ? std::string("noise unknown: give it with --noise-um (or measure some poses twice)")
+                          : d.noise_untrusted);
+  } else {
+    const bool final_consistent = accepted.empty() ? consistent(current) : held_out_at_noise(current);
+    if (final_consistent && !structure)
+      d.verdict = accepted.empty() ? "consistent" : "explained";
     else
       d.verdict = "unexplained";
-  } else {
-    d.verdict = accepted.empty() ? "consistent" : "explained";
   }
+  if (structure) d.notes.push_back("structure left in the residual: " + structure_why);
 }
 
 void DiagnosisRun::residual_per_node() {
@@ -855,6 +1027,50 @@ void DiagnosisRun::by_region() {
   }
 }
 
+DiagnosisRun::JointFinding DiagnosisRun::joint_finding(int j) const {
+  // Bins of q_j: mean standardised residual per bin; χ² = Σ n_b·z̄_b².
+  std::vector<std::size_t> idx(base.nodes.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
+    return base.nodes[a].effect.q(j) < base.nodes[b].effect.q(j);
+  });
+  const std::size_t bins = std::max<std::size_t>(2, std::min<std::size_t>(10, idx.size() / 8));
+  JointFinding f;
+  f.joint = j;
+  double best_z = 0;
+  std::vector<double> bin_z(bins, 0.0);
+  std::vector<std::pair<double, double>> bin_range(bins);
+  for (std::size_t b = 0; b < bins; ++b) {
+    const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
+    if (to <= from || !(sigma_mm > 0)) continue;
+    double zsum = 0;
+    for (std::size_t i = from; i < to; ++i) {
+      const std::size_t k = idx[i];
+      zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_mm);
+    }
+    const double nb = double(to - from);
+    const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
+    f.chi2 += z * z;
+    f.dof += 1;
+    bin_z[b] = z;
+    bin_range[b] = {base.nodes[idx[from]].effect.q(j), base.nodes[idx[to - 1]].effect.q(j)};
+    if (std::abs(z) > std::abs(best_z)) best_z = z;
+  }
+  f.p = chi2_upper_tail(f.chi2, f.dof);
+  // The stretch of the stroke where the residual sits: the strongest bin
+  // and its neighbours of the same sign above 2σ.
+  std::size_t peak = 0;
+  for (std::size_t b = 0; b < bins; ++b)
+    if (std::abs(bin_z[b]) > std::abs(bin_z[peak])) peak = b;
+  std::size_t lo = peak, hi = peak;
+  while (lo > 0 && std::abs(bin_z[lo - 1]) > 2.0 && bin_z[lo - 1] * bin_z[peak] > 0) --lo;
+  while (hi + 1 < bins && std::abs(bin_z[hi + 1]) > 2.0 && bin_z[hi + 1] * bin_z[peak] > 0) ++hi;
+  f.lo = bin_range[lo].first;
+  f.hi = bin_range[hi].second;
+  f.peak = best_z;
+  return f;
+}
+
 void DiagnosisRun::by_joint() {
   if (!std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
     d.notes.push_back("fewer than three targets do not measure each node's whole pose: no per-joint residual map");
@@ -862,68 +1078,23 @@ void DiagnosisRun::by_joint() {
   }
   // Joints: the implied joint-space residual, standardised by its noise, in
   // bins of the joint's own position (a local error in part of a stroke).
-  struct JointFinding {
-    int joint = 0;
-    double chi2 = 0, dof = 0, p = 1;
-    double lo = 0, hi = 0, peak = 0;
-  };
   std::vector<JointFinding> findings;
   for (int j = 0; j < 6; ++j) {
-    std::vector<std::size_t> idx(base.nodes.size());
-    std::iota(idx.begin(), idx.end(), 0);
     double ss = 0, noise_ss = 0;
-    for (std::size_t k : idx) {
+    for (std::size_t k = 0; k < base.nodes.size(); ++k) {
       ss += after[k].joint(j) * after[k].joint(j);
       noise_ss += after[k].joint_noise_sd(j) * after[k].joint_noise_sd(j);
     }
     ResidualGroup g;
     g.label = "joint " + std::to_string(j + 1) + " (" + joint_unit(robot, j) + ")";
-    g.nodes = idx.size();
-    const double n = double(std::max<std::size_t>(1, idx.size()));
+    g.nodes = base.nodes.size();
+    const double n = double(std::max<std::size_t>(1, base.nodes.size()));
     g.rms_um = std::sqrt(ss / n) * joint_display(robot, j);
     const double noise_rms = std::sqrt(noise_ss / n) * sigma_mm;
     g.ratio = noise_rms > 0 ? std::sqrt(ss / n) / noise_rms : 0.0;
     g.label += ", " + joint_display_unit(robot, j);
     d.by_joint.push_back(g);
-    // Bins of q_j: mean standardised residual per bin; χ² = Σ n_b·z̄_b².
-    std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) {
-      return base.nodes[a].effect.q(j) < base.nodes[b].effect.q(j);
-    });
-    const std::size_t bins = std::max<std::size_t>(2, std::min<std::size_t>(10, idx.size() / 8));
-    JointFinding f;
-    f.joint = j;
-    double best_z = 0;
-    std::vector<double> bin_z(bins, 0.0);
-    std::vector<std::pair<double, double>> bin_range(bins);
-    for (std::size_t b = 0; b < bins; ++b) {
-      const std::size_t from = b * idx.size() / bins, to = (b + 1) * idx.size() / bins;
-      if (to <= from || !(sigma_mm > 0)) continue;
-      double zsum = 0;
-      for (std::size_t i = from; i < to; ++i) {
-        const std::size_t k = idx[i];
-        zsum += after[k].joint(j) / std::max(1e-300, after[k].joint_noise_sd(j) * sigma_mm);
-      }
-      const double nb = double(to - from);
-      const double z = zsum / std::sqrt(nb);  // N(0, 1) under noise
-      f.chi2 += z * z;
-      f.dof += 1;
-      bin_z[b] = z;
-      bin_range[b] = {base.nodes[idx[from]].effect.q(j), base.nodes[idx[to - 1]].effect.q(j)};
-      if (std::abs(z) > std::abs(best_z)) best_z = z;
-    }
-    f.p = chi2_upper_tail(f.chi2, f.dof);
-    // The stretch of the stroke where the residual sits: the strongest bin
-    // and its neighbours of the same sign above 2σ.
-    std::size_t peak = 0;
-    for (std::size_t b = 0; b < bins; ++b)
-      if (std::abs(bin_z[b]) > std::abs(bin_z[peak])) peak = b;
-    std::size_t lo = peak, hi = peak;
-    while (lo > 0 && std::abs(bin_z[lo - 1]) > 2.0 && bin_z[lo - 1] * bin_z[peak] > 0) --lo;
-    while (hi + 1 < bins && std::abs(bin_z[hi + 1]) > 2.0 && bin_z[hi + 1] * bin_z[peak] > 0) ++hi;
-    f.lo = bin_range[lo].first;
-    f.hi = bin_range[hi].second;
-    f.peak = best_z;
-    findings.push_back(f);
+    findings.push_back(joint_finding(j));
   }
   std::sort(findings.begin(), findings.end(), [](const JointFinding& a, const JointFinding& b) {
     return a.chi2 / std::max(1.0, a.dof) > b.chi2 / std::max(1.0, b.dof);
@@ -1129,6 +1300,22 @@ std::string diagnosis_to_json(const Diagnosis& d) {
     hot.push_back({{"kind", h.kind}, {"where", h.where}, {"share", h.share}, {"detail", h.detail}});
   j["hotspots"] = hot;
   j["noise_source"] = d.noise_source;
+  j["noise_trusted"] = d.noise_trusted;
+  if (!d.noise_trusted) j["noise_untrusted"] = d.noise_untrusted;
+  auto estimates_json = [](const NoiseEstimates& e) {
+    return nlohmann::ordered_json{{"joint_space", e.joint_space},
+                                  {"joint_space_wide", e.joint_space_wide},
+                                  {"joint_space_nearest_pair", e.joint_space_pairs},
+                                  {"workspace", e.workspace},
+                                  {"spacing_strokes", e.spacing}};
+  };
+  if (d.position_estimates.joint_space > 0) j["noise_estimates_um"] = estimates_json(d.position_estimates);
+  if (d.orientation_estimates.joint_space > 0) j["noise_estimates_urad"] = estimates_json(d.orientation_estimates);
+  j["structure"] = {{"ratio", d.structure_ratio}, {"p_value", d.structure_p}};
+  nlohmann::ordered_json collinear = nlohmann::ordered_json::array();
+  for (const CollinearPair& c : d.collinear)
+    collinear.push_back({{"effects", {c.first, c.second}}, {"share", c.share}});
+  j["collinear_candidates"] = collinear;
   j["noise_urad"] = d.noise_urad;
   j["noise_urad_source"] = d.noise_urad_source;
   j["robot"] = d.robot;

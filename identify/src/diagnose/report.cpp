@@ -109,6 +109,9 @@ void write_header(std::ostringstream& h, const Diagnosis& d) {
     h << "the accepted effects bring the held-out residual to the noise level.";
   else if (d.verdict == "unexplained")
     h << "a systematic residual remains; see <a href=\"#hotspots\">hotspots</a> for where it concentrates.";
+  else if (d.verdict == "noise-unknown")
+    h << "the noise could not be estimated reliably from these data, so the residual cannot be judged against it; "
+         "give it with <code>--noise-um</code> (see the notes).";
   h << "</p>\n<table class=\"kv\">";
   auto row = [&](const std::string& k, const std::string& v_html) {
     h << "<tr><td>" << k << "</td><td>" << v_html << "</td></tr>";

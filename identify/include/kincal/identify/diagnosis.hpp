@@ -107,10 +107,39 @@ struct NodeResidual {
   Vec6<double> joint_after = Vec6<double>::Zero();
 };
 
+// Two candidate effects the data can hardly tell apart: beyond the base
+// model, the columns of one lie almost inside the span of the other's.
+struct CollinearPair {
+  std::string first, second;  // first: the effect whose columns lie inside the span of the second's
+  double share = 0;           // mean share (0–1) of first's columns (orthogonalised against the base) in second's
+};
+
+// The estimators behind an estimated noise (docs/diagnosis.md "How kincal
+// knows the noise"), in the residual's units (µm or µrad).
+struct NoiseEstimates {
+  double joint_space = 0;       // local-linear pseudo-residuals, nearest nodes in joint space (the one used)
+  double joint_space_wide = 0;  // the same over twice as many neighbours (the trust test)
+  double joint_space_pairs = 0; // plain difference with the nearest node in joint space
+  double workspace = 0;         // plain differences, nearest commanded pose / motion order (before #31)
+  double spacing = 0;           // median distance to the neighbours, in strokes
+};
+
 struct Diagnosis {
   std::string robot, data_file, family;
   double noise_um = 0;
   std::string noise_source;  // "given", "repeated nodes", "estimated from neighbouring nodes in …"
+  // An estimated noise the data cannot vouch for (too few nodes, neighbours
+  // whose difference does not cancel the residual's structure): the verdict
+  // is then `noise-unknown` (or `unexplained` where the residual has
+  // structure) and `noise_untrusted` says why and names --noise-um.
+  bool noise_trusted = true;
+  std::string noise_untrusted;
+  NoiseEstimates position_estimates, orientation_estimates;
+  // Structure in the final residual over joint-space neighbours, σ-free
+  // (noise_estimate.hpp joint_space_structure): ratio < 1 and p < alpha is
+  // structure, and the verdict is never consistent or explained then.
+  double structure_ratio = 1, structure_p = 1;
+  std::vector<CollinearPair> collinear;  // candidate pairs nearly collinear with each other (beyond the base)
   double noise_urad = 0;     // 6-UPS: orientation σ (µrad); its rows are scaled to the position σ
   std::string noise_urad_source;
   RoleRms rms;               // base model
@@ -118,7 +147,7 @@ struct Diagnosis {
   std::vector<EffectTest> ranking;  // best first (first step's order), untestable at the end
   std::vector<std::string> accepted;
   std::vector<DiagnosisStep> steps;  // base, then after each accepted effect
-  std::string verdict;               // consistent | explained | unexplained
+  std::string verdict;               // consistent | explained | unexplained | noise-unknown
   RoleRms final_rms;
   std::vector<Hotspot> hotspots;
   std::vector<std::string> notes;    // what could not be done and why (bad input that still allowed a report)
