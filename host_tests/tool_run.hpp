@@ -14,6 +14,7 @@
 #include <string>
 
 #include "kincal/identify/csv.hpp"
+#include "kincal/identify/input_error.hpp"  // read_text_file
 
 namespace kincal_test {
 

@@ -274,10 +274,15 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // are dropped up front: the reconstruction works on unit-norm columns.
   const double max_norm = H.colwise().norm().maxCoeff();
   std::vector<Index> zero_cols;
+  // Seed 000's gauge pipeline keeps seed 000's 150: the tool frame (issue
+  // #31, identified from full poses and tracker targets) is held at 0 here.
+  // The gauge sees two of its rotations, and with them beside the 150 the
+  // hybrid effect fits on gauge data compensated 1.6× worse (2.67 against
+  // 1.66 µm in identify_diagnosis_test) — not understood yet.
   for (Index j = 0; j < HybridErrorModel::kParameterCount; ++j) {
     if (j < 6)
       xi_cols.push_back(j);
-    else if (H.col(j).norm() > 1e-12 * max_norm)
+    else if (j < HybridErrorModel::kSeedParameterCount && H.col(j).norm() > 1e-12 * max_norm)
       eta_cols.push_back(j);
     else
       zero_cols.push_back(j);

@@ -1,0 +1,577 @@
+// Self-test of the independent simulators (host_tests/independent/): with zero
+// errors they must reproduce core's kinematics (which they share no code
+// with), with errors they must close their loops and move the tool by the
+// amounts the geometry predicts. Core is used here only as the reference.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "independent/hybrid_simulator.hpp"
+#include "independent/stewart_simulator.hpp"
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/reference_machines.hpp"
+#include "kincal/core/stewart.hpp"
+
+namespace ind = kincal::independent;
+using ind::V3;
+using ind::V6;
+using kincal::Pose;
+using kincal::Status;
+
+namespace {
+
+const kincal::HybridGeometry<double>& hybrid_geometry() {
+  static const kincal::HybridGeometry<double> g = kincal::make_hybrid_seed000<double>();
+  return g;
+}
+const kincal::StewartGeometry<double>& stewart_geometry() {
+  static const kincal::StewartGeometry<double> g = kincal::make_stewart_seed001<double>();
+  return g;
+}
+
+double rotation_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return kincal::log_so3<double>(Eigen::Matrix3d(a * b.transpose())).norm();
+}
+
+// Poses in the task cuboid [−250, 250] × [−250, 250] × [−60, 60] mm, the
+// first `flat` at orientation 0, the rest tilted by up to ±`tilt` rad per angle.
+std::vector<V6> hybrid_poses(int flat, int tilted, double tilt, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> xy(-250, 250), z(-60, 60), a(-tilt, tilt);
+  std::vector<V6> out;
+  for (int i = 0; i < flat + tilted; ++i) {
+    V6 v;
+    v << xy(rng), xy(rng), z(rng), 0, 0, 0;
+    if (i >= flat) v.tail<3>() << a(rng), a(rng), a(rng);
+    out.push_back(v);
+  }
+  return out;
+}
+
+// Around home (0, 0, 200): ±40 mm in x, y, ±30 mm in z, ±0.12 rad.
+std::vector<V6> stewart_poses(int n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> xy(-40, 40), z(170, 230), a(-0.12, 0.12);
+  std::vector<V6> out;
+  for (int i = 0; i < n; ++i) {
+    V6 v;
+    v << xy(rng), xy(rng), z(rng), a(rng), a(rng), a(rng);
+    out.push_back(v);
+  }
+  return out;
+}
+
+// Tool twist (Δp, rotation vector) in the pose's frame convention.
+V6 twist(const Pose<double>& actual, const Pose<double>& nominal) { return kincal::pose_error(actual, nominal); }
+
+// Worst deviation of the independent FK from core's over poses reachable by
+// core's IK. Used by the agreement test and by the negative control.
+struct Agreement {
+  int poses = 0;
+  double fk_mm = 0, fk_rad = 0, ik_mm = 0, ik_rad = 0;
+  double own_mm = 0, core_mm = 0;  // each FK against the pose core's IK started from
+};
+
+Agreement hybrid_agreement(const ind::HybridSimulator& sim, const std::vector<V6>& poses) {
+  Agreement a;
+  const ind::HybridSimulator nominal;
+  for (const V6& v : poses) {
+    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
+    kincal::Vec6<double> q_core;
+    if (kincal::hybrid_ik(hybrid_geometry(), X, q_core) != Status::Ok) continue;
+    Pose<double> core_pose;
+    const auto rep = kincal::hybrid_fk(hybrid_geometry(), q_core, core_pose);
+    EXPECT_EQ(rep.status, Status::Ok);
+    V6 q_mine;
+    EXPECT_TRUE(nominal.ik(X, q_mine));
+    const ind::HybridFkResult mine = sim.fk(q_core);
+    EXPECT_TRUE(mine.ok);
+    if (!mine.ok) continue;
+    ++a.poses;
+    a.fk_mm = std::max(a.fk_mm, (mine.pose.p - core_pose.p).norm());
+    a.fk_rad = std::max(a.fk_rad, rotation_distance(mine.pose.R, core_pose.R));
+    a.own_mm = std::max(a.own_mm, (mine.pose.p - X.p).norm());
+    a.core_mm = std::max(a.core_mm, (core_pose.p - X.p).norm());
+    a.ik_mm = std::max(a.ik_mm, (q_mine.head<3>() - q_core.head<3>()).cwiseAbs().maxCoeff());
+    a.ik_rad = std::max(a.ik_rad, (q_mine.tail<3>() - q_core.tail<3>()).cwiseAbs().maxCoeff());
+  }
+  return a;
+}
+
+Agreement stewart_agreement(const ind::StewartSimulator& sim, const std::vector<V6>& poses) {
+  Agreement a;
+  const ind::StewartSimulator nominal;
+  for (const V6& v : poses) {
+    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
+    kincal::Vec6<double> q_core;
+    if (kincal::stewart_ik(stewart_geometry(), X, q_core) != Status::Ok) continue;
+    Pose<double> core_pose;
+    const auto rep = kincal::stewart_fk(stewart_geometry(), q_core, core_pose);
+    EXPECT_EQ(rep.status, Status::Ok);
+    V6 q_mine;
+    EXPECT_TRUE(nominal.ik(X, q_mine));
+    const ind::StewartFkResult mine = sim.fk(q_core);
+    EXPECT_TRUE(mine.ok);
+    if (!mine.ok) continue;
+    ++a.poses;
+    a.fk_mm = std::max(a.fk_mm, (mine.pose.p - core_pose.p).norm());
+    a.fk_rad = std::max(a.fk_rad, rotation_distance(mine.pose.R, core_pose.R));
+    a.own_mm = std::max(a.own_mm, (mine.pose.p - X.p).norm());
+    a.core_mm = std::max(a.core_mm, (core_pose.p - X.p).norm());
+    a.ik_mm = std::max(a.ik_mm, (q_mine - q_core).cwiseAbs().maxCoeff());
+  }
+  return a;
+}
+
+// Central difference of the tool twist of the machine with errors ±h·e at q.
+template <class Sim, class Errors>
+V6 central_twist(const Errors& plus, const Errors& minus, const V6& q) {
+  const auto a = Sim(plus).fk(q), b = Sim(minus).fk(q);
+  EXPECT_TRUE(a.ok && b.ok);
+  return 0.5 * twist(a.pose, b.pose);
+}
+
+// Norm mixing mm and rad with 1000 mm per rad (docs/hybrid-error-model.md §7).
+double twist_norm(const V6& t) {
+  V6 s = t;
+  s.tail<3>() *= 1000.0;
+  return s.norm();
+}
+
+const V6& hybrid_test_q(int k) {
+  // A few commanded poses spread over the cuboid, and one tilted.
+  static const std::vector<V6> q = [] {
+    std::vector<V6> out;
+    const ind::HybridSimulator nominal;
+    for (const V6& v : std::vector<V6>{(V6() << 0, 0, 0, 0, 0, 0).finished(), (V6() << 200, -150, 40, 0, 0, 0).finished(),
+                                       (V6() << -230, 210, -55, 0, 0, 0).finished(),
+                                       (V6() << 120, 80, -20, 0.1, -0.08, 0.12).finished()}) {
+      V6 qq;
+      EXPECT_TRUE(nominal.ik(Pose<double>::from_xyz_rpy(v), qq));
+      out.push_back(qq);
+    }
+    return out;
+  }();
+  return q[std::size_t(k)];
+}
+
+}  // namespace
+
+// ============================================================== hybrid
+
+TEST(IndependentHybrid, ZeroErrorsAgreeWithCore) {
+  const Agreement a = hybrid_agreement(ind::HybridSimulator(), hybrid_poses(250, 150, 0.2, 11));
+  std::printf("hybrid zero errors: %d poses, FK worst %.3g mm %.3g rad, IK worst %.3g mm %.3g rad; "
+              "FK(core IK(X)) - X: ours %.3g mm, core's %.3g mm\n",
+              a.poses, a.fk_mm, a.fk_rad, a.ik_mm, a.ik_rad, a.own_mm, a.core_mm);
+  EXPECT_GE(a.poses, 300);
+  EXPECT_LE(a.fk_mm, 1e-9);
+  EXPECT_LE(a.fk_rad, 1e-12);
+  EXPECT_LE(a.ik_mm, 1e-9);
+  EXPECT_LE(a.ik_rad, 1e-12);
+}
+
+TEST(IndependentHybrid, NegativeControlOneNanometreIsSeen) {
+  // The agreement test must be able to fail: 1 nm / 1 nrad errors in every
+  // group already exceed its bars.
+  const ind::HybridErrors e = ind::random_hybrid_errors(1e-6, 1e-9, 3);
+  const Agreement a = hybrid_agreement(ind::HybridSimulator(e), hybrid_poses(20, 0, 0, 12));
+  std::printf("hybrid 1 nm errors: FK %.3g mm %.3g rad off core\n", a.fk_mm, a.fk_rad);
+  EXPECT_GT(a.fk_mm, 1e-7);
+  EXPECT_GT(a.fk_rad, 1e-10);
+}
+
+TEST(IndependentHybrid, WithErrorsLoopsCloseAndIkInvertsFk) {
+  const ind::HybridErrors e = ind::random_hybrid_errors(0.5, 1e-3, 21);
+  const ind::HybridSimulator actual(e), nominal;
+  double worst_closure = 0, worst_leg = 0, worst_recheck = 0, worst_roundtrip_q = 0, worst_roundtrip_p = 0;
+  double largest_error = 0;
+  for (const V6& v : hybrid_poses(40, 20, 0.15, 22)) {
+    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
+    V6 q;
+    ASSERT_TRUE(nominal.ik(X, q));
+    const ind::HybridFkResult r = actual.fk(q);
+    ASSERT_TRUE(r.ok);
+    worst_closure = std::max(worst_closure, r.closure);
+    worst_leg = std::max(worst_leg, r.leg_closure);
+    largest_error = std::max(largest_error, (r.pose.p - X.p).norm());
+    // Re-close every leg at the FK's passive configuration from scratch.
+    for (int i = 0; i < 3; ++i) {
+      const ind::LegSolution sol = ind::solve_leg(actual.leg(i), actual.sphere_point(i, r.passive));
+      ASSERT_TRUE(sol.ok);
+      worst_recheck = std::max(worst_recheck, std::abs(sol.x - (q(i) + e.ups_encoder[std::size_t(i)])));
+    }
+    // The erroneous machine's own IK of the reached pose gives back q.
+    V6 q_back;
+    ASSERT_TRUE(actual.ik(r.pose, q_back));
+    worst_roundtrip_q = std::max(worst_roundtrip_q, (q_back - q).cwiseAbs().maxCoeff());
+    // And FK of its IK of the commanded pose reaches the commanded pose.
+    V6 q_exact;
+    ASSERT_TRUE(actual.ik(X, q_exact));
+    const ind::HybridFkResult back = actual.fk(q_exact);
+    ASSERT_TRUE(back.ok);
+    worst_roundtrip_p = std::max(worst_roundtrip_p, (back.pose.p - X.p).norm() + 1000 * rotation_distance(back.pose.R, X.R));
+  }
+  std::printf("hybrid with errors: closure %.3g mm, legs %.3g mm, recheck %.3g mm, IK(FK) %.3g, FK(IK) %.3g; pose error up to %.3g mm\n",
+              worst_closure, worst_leg, worst_recheck, worst_roundtrip_q, worst_roundtrip_p, largest_error);
+  EXPECT_LE(worst_closure, 1e-10);
+  EXPECT_LE(worst_leg, 1e-10);
+  EXPECT_LE(worst_recheck, 1e-10);
+  EXPECT_LE(worst_roundtrip_q, 1e-9);
+  EXPECT_LE(worst_roundtrip_p, 1e-9);
+  EXPECT_GT(largest_error, 0.1);  // 0.5 mm / 1 mrad errors do move the tool
+}
+
+TEST(IndependentHybrid, ToolErrorsMoveTheToolFrameOnItsBody) {
+  // A tool-point error d (tool coordinates) moves P by R_tool·d; a tool
+  // rotation δ turns the tool frame to R_tool·exp([δ]×). Exact, any size.
+  ind::HybridErrors e;
+  e.tool_point = V3(0.4, -0.7, 0.25);
+  e.tool_rotation = V3(2e-3, -1e-3, 3e-3);
+  const ind::HybridSimulator actual(e), nominal;
+  double worst_p = 0, worst_r = 0;
+  for (int k = 0; k < 4; ++k) {
+    const auto a = actual.fk(hybrid_test_q(k)), n = nominal.fk(hybrid_test_q(k));
+    ASSERT_TRUE(a.ok && n.ok);
+    worst_p = std::max(worst_p, (a.pose.p - n.pose.p - n.pose.R * e.tool_point).norm());
+    worst_r = std::max(worst_r, (kincal::log_so3<double>(Eigen::Matrix3d(n.pose.R.transpose() * a.pose.R)) - e.tool_rotation).norm());
+  }
+  EXPECT_LE(worst_p, 1e-9);
+  EXPECT_LE(worst_r, 1e-12);
+}
+
+TEST(IndependentHybrid, EncoderAndJointCentreErrorsMatchCoreJacobian) {
+  // First order: an encoder offset δ on joint j moves the tool by J_f(:, j)·δ
+  // (core's forward Jacobian, seed 000 Eqs. (5)–(6)). A UPS base-centre shift
+  // δA shortens the leg by u·δA, i.e. acts as the encoder offset +u·δA; a
+  // platform S-centre shift δa (platform frame) as −u·Rp·δa.
+  const double h = 1e-4;
+  double worst = 0;
+  for (int k = 0; k < 4; ++k) {
+    const V6& q = hybrid_test_q(k);
+    Pose<double> pose;
+    kincal::HybridPassive<double> passive;
+    ASSERT_EQ(kincal::hybrid_fk(hybrid_geometry(), kincal::Vec6<double>(q), hybrid_geometry().home, pose, &passive).status,
+              Status::Ok);
+    const kincal::HybridFrames<double> f =
+        kincal::hybrid_frames(hybrid_geometry(), passive, kincal::Vec3<double>(q.tail<3>()));
+    kincal::Mat6<double> J;
+    ASSERT_TRUE(kincal::hybrid_forward_jacobian(hybrid_geometry(), f, J));
+    auto check = [&](const V6& measured, const V6& expected) {
+      worst = std::max(worst, twist_norm(measured - expected) / twist_norm(expected));
+    };
+    for (int j = 0; j < 6; ++j) {
+      ind::HybridErrors p, m;
+      if (j < 3) {
+        p.ups_encoder[std::size_t(j)] = h;
+        m.ups_encoder[std::size_t(j)] = -h;
+      } else {
+        p.wrist_encoder[std::size_t(j - 3)] = h * 1e-3;
+        m.wrist_encoder[std::size_t(j - 3)] = -h * 1e-3;
+      }
+      const double step = j < 3 ? h : h * 1e-3;
+      check(central_twist<ind::HybridSimulator>(p, m, q), V6(J.col(j) * step));
+    }
+    for (int i = 0; i < 3; ++i) {
+      const V3 u = f.legs.col(i).normalized();
+      const V3 d(0.3 * h, -0.8 * h, 0.5 * h);
+      ind::HybridErrors p, m;
+      p.ups[std::size_t(i)].base_centre = d;
+      m.ups[std::size_t(i)].base_centre = -d;
+      check(central_twist<ind::HybridSimulator>(p, m, q), V6(J.col(i) * u.dot(d)));
+      ind::HybridErrors p2, m2;
+      p2.ups_platform_centre[std::size_t(i)] = d;
+      m2.ups_platform_centre[std::size_t(i)] = -d;
+      check(central_twist<ind::HybridSimulator>(p2, m2, q), V6(-J.col(i) * u.dot(f.Rp * d)));
+    }
+  }
+  std::printf("hybrid first order vs core Jacobian: worst relative deviation %.3g\n", worst);
+  EXPECT_LE(worst, 1e-6);
+}
+
+TEST(IndependentHybrid, WristLineShiftMovesToolAsRotationAboutShiftedAxis) {
+  // Shifting joint k's line by δp (reference configuration) replaces its motion
+  // e^{[S]θ} by Trans(δp)·e^{[S]θ}·Trans(−δp): the tool point moves by
+  // R_{<k}·(I − R_k(θ_k))·δp and the orientation not at all — exactly. The
+  // part of δp along the axis does nothing. R_{<k}: Rp, F4, F5 of core's frames.
+  const V3 dp(0.3, -0.2, 0.45);
+  double worst = 0;
+  for (int k = 0; k < 4; ++k) {
+    const V6& q = hybrid_test_q(k);
+    const auto n = ind::HybridSimulator().fk(q);
+    ASSERT_TRUE(n.ok);
+    kincal::HybridPassive<double> s;
+    s.theta1 = n.passive(0);
+    s.theta2 = n.passive(1);
+    s.extension = n.passive(2);
+    const kincal::HybridFrames<double> f = kincal::hybrid_frames(hybrid_geometry(), s, kincal::Vec3<double>(q.tail<3>()));
+    const Eigen::Matrix3d before[3] = {f.Rp, f.F4, f.F5};
+    const Eigen::Matrix3d own[3] = {kincal::rot_z(q(3)), kincal::rot_x(q(4)), kincal::rot_y(q(5))};
+    for (int j = 0; j < 3; ++j) {
+      ind::HybridErrors e;
+      e.wrist[std::size_t(j)].point = dp;
+      const auto a = ind::HybridSimulator(e).fk(q);
+      ASSERT_TRUE(a.ok);
+      const V3 expected = hybrid_geometry().workpiece_rotation * before[j] * (Eigen::Matrix3d::Identity() - own[j]) * dp;
+      worst = std::max(worst, (a.pose.p - n.pose.p - expected).norm() + 1000 * rotation_distance(a.pose.R, n.pose.R));
+    }
+  }
+  EXPECT_LE(worst, 1e-9);
+}
+
+TEST(IndependentHybrid, UAxisDirectionsActOnlyThroughTheAxisOffset) {
+  // Two revolutes whose lines meet at A turn the leg rigidly about A, so the
+  // sphere centre keeps |S − A|² = x² + |o|² whatever the axis directions,
+  // even with a leg offset o (formula in the next test): tilting the UPS U
+  // axes changes nothing. Once the two axes are apart (axis offset) the
+  // tilts matter. A check that the U is modelled as two lines.
+  ind::HybridErrors e;
+  for (auto& leg : e.ups) {
+    leg.axis_a_tilt = {0.01, -0.02};
+    leg.axis_b_tilt = {-0.015, 0.01};
+    leg.leg_offset = {1.0, -0.5};
+  }
+  ind::HybridErrors offsets_only;
+  for (auto& leg : offsets_only.ups) leg.leg_offset = {1.0, -0.5};
+  double worst = 0;
+  for (int k = 0; k < 4; ++k) {
+    const auto a = ind::HybridSimulator(e).fk(hybrid_test_q(k)), n = ind::HybridSimulator(offsets_only).fk(hybrid_test_q(k));
+    ASSERT_TRUE(a.ok && n.ok);
+    worst = std::max(worst, (a.pose.p - n.pose.p).norm() + 1000 * rotation_distance(a.pose.R, n.pose.R));
+  }
+  EXPECT_LE(worst, 1e-9);
+  // With the axes 2 mm apart along the leg, the tilts move the tool.
+  for (auto& leg : e.ups) leg.axis_offset = 2.0;
+  for (auto& leg : offsets_only.ups) leg.axis_offset = 2.0;
+  const auto a = ind::HybridSimulator(e).fk(hybrid_test_q(3)), b = ind::HybridSimulator(offsets_only).fk(hybrid_test_q(3));
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_GT((a.pose.p - b.pose.p).norm(), 1e-4);
+}
+
+TEST(IndependentHybrid, LegOffsetChangesTheLegByTheGeometricFormula) {
+  // With the U axes through one centre A and the prismatic line at distance
+  // |o| from A (o ⟂ u), the U turns o + x·u rigidly about A, so the sphere
+  // centre S satisfies |S − A|² = x² + |o|²: the leg's required value is
+  // x = √(|S − A|² − |o|²) ≈ |S − A| − |o|²/(2|S − A|), zero to first order
+  // in o. Checked on the leg solve and on the FK (whose legs then satisfy
+  // |S_i − A_i|² = q_i² + |o_i|²).
+  ind::HybridErrors e;
+  const std::array<double, 2> o[3] = {{3.0, -2.0}, {-1.5, 2.5}, {0.5, 4.0}};
+  for (int i = 0; i < 3; ++i) e.ups[std::size_t(i)].leg_offset = o[i];
+  const ind::HybridSimulator actual(e);
+  double worst_leg = 0, worst_fk = 0, smallest_effect = 1e9;
+  for (int k = 0; k < 4; ++k) {
+    const auto r = actual.fk(hybrid_test_q(k));
+    ASSERT_TRUE(r.ok);
+    for (int i = 0; i < 3; ++i) {
+      const double o2 = o[i][0] * o[i][0] + o[i][1] * o[i][1];
+      const V3 A = actual.leg(i).u_centre;
+      const V3 S = actual.sphere_point(i, r.passive);
+      const double L = (S - A).norm();
+      const ind::LegSolution sol = ind::solve_leg(actual.leg(i), S);
+      worst_leg = std::max(worst_leg, std::abs(sol.x - std::sqrt(L * L - o2)));
+      const double q = hybrid_test_q(k)(i);
+      worst_fk = std::max(worst_fk, std::abs(L - std::sqrt(q * q + o2)));
+      smallest_effect = std::min(smallest_effect, L - q);
+    }
+  }
+  EXPECT_LE(worst_leg, 1e-10);
+  EXPECT_LE(worst_fk, 1e-10);
+  EXPECT_GT(smallest_effect, 1e-3);  // |o|²/(2L) ≈ 1e-3 … 1e-2 mm: a real change
+}
+
+TEST(IndependentHybrid, EveryGroupActsLinearlyAtFirstOrder) {
+  // Groups without a closed-form prediction (UP limb, U axis offsets, wrist
+  // directions…): the tool moves, and twice the error moves it twice as far
+  // up to second order — the FK is smooth in every parameter. (The U axes
+  // group is weak: its tilts act only through the axis offset, and the axis
+  // offset e changes the leg by ≈ e·φ²/2, φ the leg's swing about its
+  // second U axis from the reference configuration.)
+  const V6& q = hybrid_test_q(3);
+  const auto n = ind::HybridSimulator().fk(q);
+  ASSERT_TRUE(n.ok);
+  for (const std::string& group : ind::HybridErrors::group_names()) {
+    // 1 µm / 1 µrad; 0.1 mm for the leg offsets, whose second-order effect
+    // would be lost in the FK's 1e-12 mm resolution at 1 µm.
+    const double length = group == "leg_offsets" ? 0.1 : 1e-3;
+    const ind::HybridErrors e1 = ind::random_hybrid_errors(length, 1e-6, 5, {group});
+    const ind::HybridErrors e2 = ind::random_hybrid_errors(2 * length, 2e-6, 5, {group});  // same draws, twice the scale
+    const auto a1 = ind::HybridSimulator(e1).fk(q), a2 = ind::HybridSimulator(e2).fk(q);
+    ASSERT_TRUE(a1.ok && a2.ok) << group;
+    const V6 d1 = twist(a1.pose, n.pose), d2 = twist(a2.pose, n.pose);
+    // Leg offsets act at second order only (next-but-one test): the motion quadruples.
+    const double power = group == "leg_offsets" ? 4.0 : 2.0;
+    EXPECT_GT(twist_norm(d1), group == "leg_offsets" ? 1e-10 : 1e-6) << group;
+    EXPECT_LE(twist_norm(d2 - power * d1), 1e-3 * twist_norm(d1)) << group;
+    std::printf("hybrid group %-18s: tool twist %.3g (mm, 1000 mm/rad), 2x -> ratio %.6f\n", group.c_str(),
+                twist_norm(d1), twist_norm(d2) / twist_norm(d1));
+  }
+  EXPECT_THROW(ind::random_hybrid_errors(1, 1, 1, {"no_such_group"}), std::invalid_argument);
+}
+
+TEST(IndependentHybrid, GaugeTargetsSitOnTheToolAsSeed000Says) {
+  // |P0 Pj| = 200 mm in the plane normal to the tool axis through P0, with
+  // P0 250 mm back along the tool axis from P (reference-machines.md "Gauge").
+  const auto t = ind::HybridSimulator::gauge_targets();
+  const V3 P0(0, 0, 250);
+  for (const V3& p : t) {
+    EXPECT_NEAR((p - P0).norm(), 200.0, 1e-12);
+    EXPECT_NEAR((p - P0).z(), 0.0, 1e-12);
+  }
+  EXPECT_NEAR(t[0].x(), 0.0, 1e-12);  // P0P1 along the tool's y axis
+  EXPECT_GT(t[0].y(), 0.0);
+  EXPECT_NEAR(t[1].y(), t[2].y(), 1e-12);  // P2P3 parallel to x
+}
+
+// ============================================================== 6-UPS
+
+TEST(IndependentStewart, ZeroErrorsAgreeWithCore) {
+  const Agreement a = stewart_agreement(ind::StewartSimulator(), stewart_poses(300, 31));
+  std::printf("6-UPS zero errors: %d poses, FK worst %.3g mm %.3g rad, IK worst %.3g mm; "
+              "FK(core IK(X)) - X: ours %.3g mm, core's %.3g mm\n",
+              a.poses, a.fk_mm, a.fk_rad, a.ik_mm, a.own_mm, a.core_mm);
+  EXPECT_GE(a.poses, 200);
+  EXPECT_LE(a.fk_mm, 1e-9);
+  EXPECT_LE(a.fk_rad, 1e-12);
+  EXPECT_LE(a.ik_mm, 1e-9);
+}
+
+TEST(IndependentStewart, NegativeControlOneNanometreIsSeen) {
+  const ind::StewartErrors e = ind::random_stewart_errors(1e-6, 1e-9, 4);
+  const Agreement a = stewart_agreement(ind::StewartSimulator(e), stewart_poses(20, 32));
+  std::printf("6-UPS 1 nm errors: FK %.3g mm %.3g rad off core\n", a.fk_mm, a.fk_rad);
+  EXPECT_GT(a.fk_mm, 1e-7);
+  EXPECT_GT(a.fk_rad, 1e-10);
+}
+
+TEST(IndependentStewart, WithErrorsLoopsCloseAndIkInvertsFk) {
+  const ind::StewartErrors e = ind::random_stewart_errors(0.5, 1e-3, 41);
+  const ind::StewartSimulator actual(e), nominal;
+  double worst_closure = 0, worst_leg = 0, worst_recheck = 0, worst_q = 0, worst_p = 0, largest = 0;
+  for (const V6& v : stewart_poses(60, 42)) {
+    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
+    V6 q;
+    ASSERT_TRUE(nominal.ik(X, q));
+    const auto r = actual.fk(q);
+    ASSERT_TRUE(r.ok);
+    worst_closure = std::max(worst_closure, r.closure);
+    worst_leg = std::max(worst_leg, r.leg_closure);
+    largest = std::max(largest, (r.pose.p - X.p).norm());
+    for (int i = 0; i < 6; ++i) {
+      const ind::LegSolution sol = ind::solve_leg(actual.leg(i), r.platform.transform(actual.platform_point(i)));
+      worst_recheck = std::max(worst_recheck, std::abs(sol.x - (q(i) + e.encoder[std::size_t(i)])));
+    }
+    V6 q_back;
+    ASSERT_TRUE(actual.ik(r.pose, q_back));
+    worst_q = std::max(worst_q, (q_back - q).cwiseAbs().maxCoeff());
+    V6 q_exact;
+    ASSERT_TRUE(actual.ik(X, q_exact));
+    const auto back = actual.fk(q_exact);
+    ASSERT_TRUE(back.ok);
+    worst_p = std::max(worst_p, (back.pose.p - X.p).norm() + 200 * rotation_distance(back.pose.R, X.R));
+  }
+  std::printf("6-UPS with errors: closure %.3g mm, legs %.3g mm, recheck %.3g mm, IK(FK) %.3g, FK(IK) %.3g; pose error up to %.3g mm\n",
+              worst_closure, worst_leg, worst_recheck, worst_q, worst_p, largest);
+  EXPECT_LE(worst_closure, 1e-10);
+  EXPECT_LE(worst_leg, 1e-10);
+  EXPECT_LE(worst_recheck, 1e-10);
+  EXPECT_LE(worst_q, 1e-9);
+  EXPECT_LE(worst_p, 1e-9);
+  EXPECT_GT(largest, 0.1);
+}
+
+TEST(IndependentStewart, FirstOrderEffectsMatchGeometry) {
+  // Tool offset: exact, p + R·d and R·exp([δ]×). Encoders: twist = J⁻¹·e_i·δ
+  // with core's J = ∂q/∂twist (seed 001 Eq. (1) differentiated). Base centre
+  // δB: the encoder offset +u·δB; platform centre δP: −u·R·δP.
+  const double h = 1e-4;
+  double worst_tool = 0, worst = 0;
+  for (const V6& v : stewart_poses(5, 51)) {
+    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
+    V6 q;
+    ASSERT_TRUE(ind::StewartSimulator().ik(X, q));
+    const auto n = ind::StewartSimulator().fk(q);
+    ASSERT_TRUE(n.ok);
+    ind::StewartErrors tool;
+    tool.tool_point = V3(1.5, -0.5, 2.0);
+    tool.tool_rotation = V3(1e-3, 2e-3, -1.5e-3);
+    const auto t = ind::StewartSimulator(tool).fk(q);
+    ASSERT_TRUE(t.ok);
+    worst_tool = std::max(worst_tool, (t.pose.p - n.pose.p - n.pose.R * tool.tool_point).norm() +
+                                          1000 * (kincal::log_so3<double>(Eigen::Matrix3d(n.pose.R.transpose() * t.pose.R)) -
+                                                  tool.tool_rotation)
+                                                     .norm());
+    const kincal::Mat6<double> J = kincal::stewart_jacobian(stewart_geometry(), n.pose);
+    const kincal::Mat6<double> Jinv = J.inverse();
+    const Eigen::Matrix<double, 3, 6> legs = kincal::stewart_leg_vectors(stewart_geometry(), n.pose);
+    for (int i = 0; i < 6; ++i) {
+      const V3 u = legs.col(i).normalized();
+      const V3 d(0.3 * h, -0.8 * h, 0.5 * h);
+      auto check = [&](const V6& measured, double equivalent) {
+        const V6 expected = Jinv.col(i) * equivalent;
+        worst = std::max(worst, twist_norm(measured - expected) / twist_norm(expected));
+      };
+      ind::StewartErrors p, m;
+      p.encoder[std::size_t(i)] = h;
+      m.encoder[std::size_t(i)] = -h;
+      check(central_twist<ind::StewartSimulator>(p, m, q), h);
+      ind::StewartErrors pb, mb;
+      pb.base_centre[std::size_t(i)] = d;
+      mb.base_centre[std::size_t(i)] = -d;
+      check(central_twist<ind::StewartSimulator>(pb, mb, q), u.dot(d));
+      ind::StewartErrors pp, mp;
+      pp.platform_centre[std::size_t(i)] = d;
+      mp.platform_centre[std::size_t(i)] = -d;
+      check(central_twist<ind::StewartSimulator>(pp, mp, q), -u.dot(n.pose.R * d));
+    }
+  }
+  std::printf("6-UPS first order vs core Jacobian: worst relative deviation %.3g\n", worst);
+  EXPECT_LE(worst_tool, 1e-9);
+  EXPECT_LE(worst, 1e-6);
+}
+
+TEST(IndependentStewart, LegOffsetChangesTheLegByTheGeometricFormula) {
+  // As for the hybrid: x = √(|S − B|² − |o|²) (derivation there).
+  ind::StewartErrors e;
+  for (int i = 0; i < 6; ++i) e.leg_offset[std::size_t(i)] = {1.0 + 0.3 * i, -2.0 + 0.5 * i};
+  const ind::StewartSimulator actual(e);
+  double worst = 0, smallest_effect = 1e9;
+  for (const V6& v : stewart_poses(10, 61)) {
+    V6 q;
+    ASSERT_TRUE(ind::StewartSimulator().ik(Pose<double>::from_xyz_rpy(v), q));
+    const auto r = actual.fk(q);
+    ASSERT_TRUE(r.ok);
+    for (int i = 0; i < 6; ++i) {
+      const auto& o = e.leg_offset[std::size_t(i)];
+      const double o2 = o[0] * o[0] + o[1] * o[1];
+      const double L = (r.platform.transform(actual.platform_point(i)) - actual.leg(i).u_centre).norm();
+      worst = std::max(worst, std::abs(L - std::sqrt(q(i) * q(i) + o2)));
+      smallest_effect = std::min(smallest_effect, L - q(i));
+    }
+  }
+  EXPECT_LE(worst, 1e-10);
+  EXPECT_GT(smallest_effect, 1e-3);
+}
+
+TEST(IndependentStewart, EveryGroupActsLinearlyAtFirstOrder) {
+  V6 q;
+  ASSERT_TRUE(ind::StewartSimulator().ik(Pose<double>::from_xyz_rpy(10, -5, 210, 0.05, -0.03, 0.08), q));
+  const auto n = ind::StewartSimulator().fk(q);
+  ASSERT_TRUE(n.ok);
+  for (const std::string& group : ind::StewartErrors::group_names()) {
+    const auto e1 = ind::random_stewart_errors(1e-3, 1e-6, 6, {group});
+    const auto e2 = ind::random_stewart_errors(2e-3, 2e-6, 6, {group});
+    const auto a1 = ind::StewartSimulator(e1).fk(q), a2 = ind::StewartSimulator(e2).fk(q);
+    ASSERT_TRUE(a1.ok && a2.ok) << group;
+    const V6 d1 = twist(a1.pose, n.pose), d2 = twist(a2.pose, n.pose);
+    if (group == "leg_offsets") {
+      // Second order only (the formula above): tiny, and it quadruples.
+      EXPECT_LE(twist_norm(d1), 1e-6) << group;
+      continue;
+    }
+    EXPECT_GT(twist_norm(d1), 1e-5) << group;
+    EXPECT_LE(twist_norm(d2 - 2 * d1), 1e-4 * twist_norm(d1)) << group;
+  }
+}
