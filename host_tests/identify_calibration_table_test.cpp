@@ -81,7 +81,7 @@ TEST(identifyCalibrationTable, HybridErrorTwistEqualsBTimesChi) {
     scaled.tail<3>() *= 1000.0;
     worst = std::max(worst, scale_err.norm() / scaled.norm());
     // float: the same twist from float geometry, pose and errors.
-    const Eigen::Matrix<float, 150, 1> chif = chi.cast<float>();
+    const Eigen::Matrix<float, ki::HybridErrorModel::kParameterCount, 1> chif = chi.cast<float>();
     HybridFrames<float> ff;
     Vec3<float> af;
     ASSERT_EQ(hybrid_frames_at_pose(gf, pose.cast<float>(), ff, af), Status::Ok);

@@ -103,11 +103,11 @@ Eigen::VectorXd random_errors(std::mt19937_64& rng, double size_mm = 0.010, doub
 
 TEST(identifyHybridErrorModel, ParameterCountAndStableNames) {
   const HybridErrorModel& m = model();
-  ASSERT_EQ(m.size(), 150);
-  ASSERT_EQ(static_cast<int>(m.parameters().size()), 150);
+  ASSERT_EQ(m.size(), 156);  // seed 000's 150 + the tool frame's 6 (issue #31)
+  ASSERT_EQ(static_cast<int>(m.parameters().size()), 156);
   std::set<std::string> names;
   for (const auto& p : m.parameters()) names.insert(p.name);
-  EXPECT_EQ(names.size(), 150u);
+  EXPECT_EQ(names.size(), 156u);
   const char* const encoders[6] = {"dxi_3_1", "dxi_3_2", "dxi_3_3", "dxi_4_4", "dxi_5_4", "dxi_6_4"};
   for (int k = 0; k < 6; ++k) {
     EXPECT_EQ(m.index_of(encoders[k]), k);
@@ -123,7 +123,13 @@ TEST(identifyHybridErrorModel, ParameterCountAndStableNames) {
   EXPECT_GE(m.index_of("dgamma_3_1"), 0);
   EXPECT_EQ(m.index_of("dz_3_4"), -1);
   EXPECT_GE(m.index_of("dz_4_4"), 0);
+  // The tool frame comes after seed 000's 150; the UPS limbs have no frame 7.
   EXPECT_EQ(m.index_of("dx_7_1"), -1);
+  EXPECT_EQ(m.index_of("dx_7_4"), 150);
+  EXPECT_EQ(m.parameters()[150].symbol, "Δx_{7,4}");
+  EXPECT_STREQ(m.parameters()[152].unit(), "mm");
+  EXPECT_STREQ(m.parameters()[153].unit(), "rad");
+  EXPECT_EQ(m.index_of("dx_8_4"), -1);
   EXPECT_EQ(m.index_of("dx_0_5"), -1);  // the wrist has no base frame of its own
   EXPECT_EQ(m.parameters()[static_cast<std::size_t>(m.index_of("dx_2_1"))].symbol, "Δx_{2,1}");
   int per_limb[5] = {0, 0, 0, 0, 0};
@@ -131,7 +137,7 @@ TEST(identifyHybridErrorModel, ParameterCountAndStableNames) {
   EXPECT_EQ(per_limb[1], 37);  // 6 + 6·5 + Δξ_{a,3,1}
   EXPECT_EQ(per_limb[2], 37);
   EXPECT_EQ(per_limb[3], 37);
-  EXPECT_EQ(per_limb[4], 39);  // UP limb 6 + 3·5, wrist 3·5 + 3 encoders
+  EXPECT_EQ(per_limb[4], 45);  // UP limb 6 + 3·5, wrist 3·5 + 3 encoders + the tool frame's 6
 }
 
 TEST(identifyHybridErrorModel, ZeroErrorsReproduceCoreFkOverTheCuboid) {
@@ -426,7 +432,14 @@ Identifiable identifiable_set(const HybridErrorModel& m, const char* label) {
 
 TEST(identifyHybridErrorModel, IdentifiableSetForTwoPureTranslationLayers) {
   const Identifiable before = identifiable_set(model(), "errors before joint motion");
-  EXPECT_EQ(before.rank, 51);  // docs/hybrid-error-model.md: 51 vs seed 000's 54
+  // docs/hybrid-error-model.md: 51 of seed 000's 150 (seed 000: 54 of 145),
+  // and two of the tool frame's rotations (dbeta_7_4, dgamma_7_4: the gauge's
+  // targets are fixed in the tool frame; its translations are the wrist's).
+  EXPECT_EQ(before.rank, 53);
+  const auto kept_name = [&](const char* n) {
+    return std::find(before.kept.begin(), before.kept.end(), model().index_of(n)) != before.kept.end();
+  };
+  EXPECT_TRUE(kept_name("dbeta_7_4") && kept_name("dgamma_7_4"));
   EXPECT_EQ(static_cast<int>(before.kept.size()), before.rank);
   const Identifiable after = identifiable_set(model_moving(), "errors after joint motion");
   EXPECT_EQ(static_cast<int>(after.kept.size()), after.rank);

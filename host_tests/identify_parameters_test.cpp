@@ -56,8 +56,9 @@ TEST(identifyParameters, StewartValuesAddToTheRightQuantity) {
 
 TEST(identifyParameters, HybridNamesAreCaseSensitive) {
   const ki::Robot h = ki::builtin_robot("hybrid-seed000");
-  // encoder offsets, UPS joint centres, wrist lengths, and seed 000's 150 source errors
-  EXPECT_EQ(ki::parameter_names(h).size(), 6u + 9u + 9u + 3u + 150u);
+  // encoder offsets, UPS joint centres, wrist lengths, seed 000's 150 source
+  // errors and the tool frame's 6 (issue #31)
+  EXPECT_EQ(ki::parameter_names(h).size(), 6u + 9u + 9u + 3u + 150u + 6u);
   const ki::ParameterSet p = ki::parse_parameters(
       "name,value\ndq2,0.1\ndtheta5,0.001\ndXA1,0.2\ndXa1,0.3\nd_tool_length,-0.4\n", "p.csv", h);
   const ki::Robot a = ki::apply_parameters(h, p);

@@ -45,7 +45,7 @@ const HybridCalibrationTabled& hybrid_calibrated() {
     HybridCalibrationTabled c = hybrid_nominal();
     const double xi[6] = {0.31, -0.22, 0.14, 4e-4, -3e-4, 2.5e-4};
     for (int i = 0; i < 6; ++i) c.machine.encoder_offsets[i] = xi[i];
-    for (int k = 6; k < kHybridSourceErrorCount; k += 7) c.machine.source_errors[k] = (k % 3 == 0 ? 0.03 : -2e-5);
+    for (int k = 6; k < HybridErrorLayout::tool(); k += 7) c.machine.source_errors[k] = (k % 3 == 0 ? 0.03 : -2e-5);
     return seal_table(c);
   }();
   return t;

@@ -97,7 +97,11 @@ TEST(PortNoMalloc, HybridControllerLoop) {
   static const HybridCalibrationTabled table = [] {
     HybridCalibrationTabled t = nominal;
     for (int i = 0; i < 6; ++i) t.machine.encoder_offsets[i] = i < 3 ? 0.2 : 3e-4;
-    for (int k = 6; k < kHybridSourceErrorCount; k += 5) t.machine.source_errors[k] = 0.02;
+    for (int k = 6; k < HybridErrorLayout::tool(); k += 5) t.machine.source_errors[k] = 0.02;
+    // The tool frame too (a 0.02 rad tool rotation would need more wrist
+    // correction than the default bound).
+    t.machine.source_errors[HybridErrorLayout::tool() + 1] = -0.04;
+    t.machine.source_errors[HybridErrorLayout::tool() + 4] = 2e-3;
     t.effects.scale[0] = 1e-4;
     return seal_table(t);
   }();

@@ -27,6 +27,7 @@
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/files.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
@@ -211,7 +212,7 @@ int run_identify_hybrid_gauge(const IdentifyArgs& a, const ki::Robot& robot, con
   for (std::size_t k = 0; k < c.coarse_history.size(); ++k)
     std::cout << "    round " << k + 1 << ": gauge residual rms " << 1e3 * c.coarse_history[k].rms_residual
               << " um, relative change " << c.coarse_history[k].relative_change << "\n";
-  std::cout << "  fine: " << c.kept.size() << " of 150 source errors identifiable (Sec. 4.1 reconstruction), rank "
+  std::cout << "  fine: " << c.kept.size() << " of " << ki::HybridErrorModel::kParameterCount << " source errors identifiable (Sec. 4.1 reconstruction), rank "
             << c.rank << ", condition number " << c.condition_number << "\n";
   if (c.linearisations.size() > 1) {
     // Large source errors: seed 000's one linear step did not predict the
@@ -281,7 +282,7 @@ int run_identify_hybrid_gauge(const IdentifyArgs& a, const ki::Robot& robot, con
       j["fine_stage"] = {{"estimator", estimator}, {"estimator_settings", ki::estimator_settings(est, eo)}};
     }
     j["rank"] = used.rank;
-    j["parameters"] = 150;
+    j["parameters"] = ki::HybridErrorModel::kParameterCount;
     j["identifiable"] = used.kept_names;
     j["dropped"] = used.dropped_names;
     j["dropped_hint"] = hint.text;

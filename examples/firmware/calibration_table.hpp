@@ -40,7 +40,7 @@ inline constexpr ::kincal::MachineLimits<float> kLimits_float = {
     {5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164},  // max_correction
     10.0, 0.0099999997764825821, 0.0010000000474974513, 0.10000000149011612};  // max_geometry_error, max_scale, max_thermal, max_angle_error
 
-inline constexpr double kCalibrationValues_double[289] = {
+inline constexpr double kCalibrationValues_double[295] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -226,6 +226,12 @@ inline constexpr double kCalibrationValues_double[289] = {
     0.0,  // dz_6_4 mm
     0.0,  // dalpha_6_4 rad
     3.0344277496188283e-05,  // dbeta_6_4 rad
+    0.0,  // dx_7_4 mm
+    0.0,  // dy_7_4 mm
+    0.0,  // dz_7_4 mm
+    0.0,  // dalpha_7_4 rad
+    0.0,  // dbeta_7_4 rad
+    0.0,  // dgamma_7_4 rad
     // effects.scale
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // effects.backlash
@@ -257,7 +263,7 @@ inline constexpr double kCalibrationValues_double[289] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kCalibrationCrc_double = 0x525E3F3Au;
+inline constexpr std::uint32_t kCalibrationCrc_double = 0xB72453FCu;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kCalibrationTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kCalibrationValues_double, kCalibrationCrc_double);
 static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_double,
@@ -265,7 +271,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_d
 static_assert(::kincal::validate_table(kCalibrationTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
               "Calibration table (double): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kNominalValues_double[289] = {
+inline constexpr double kNominalValues_double[295] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -451,6 +457,12 @@ inline constexpr double kNominalValues_double[289] = {
     0.0,  // dz_6_4 mm
     0.0,  // dalpha_6_4 rad
     0.0,  // dbeta_6_4 rad
+    0.0,  // dx_7_4 mm
+    0.0,  // dy_7_4 mm
+    0.0,  // dz_7_4 mm
+    0.0,  // dalpha_7_4 rad
+    0.0,  // dbeta_7_4 rad
+    0.0,  // dgamma_7_4 rad
     // effects.scale
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // effects.backlash
@@ -482,7 +494,7 @@ inline constexpr double kNominalValues_double[289] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kNominalCrc_double = 0x1FDBCF7Bu;
+inline constexpr std::uint32_t kNominalCrc_double = 0x626F1573u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kNominalTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kNominalValues_double, kNominalCrc_double);
 static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
@@ -490,7 +502,7 @@ static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
 static_assert(::kincal::validate_table(kNominalTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
               "Nominal table (double): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kCalibrationValues_float[289] = {
+inline constexpr double kCalibrationValues_float[295] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -676,6 +688,12 @@ inline constexpr double kCalibrationValues_float[289] = {
     0.0,  // dz_6_4 mm
     0.0,  // dalpha_6_4 rad
     3.0344277547555976e-05,  // dbeta_6_4 rad
+    0.0,  // dx_7_4 mm
+    0.0,  // dy_7_4 mm
+    0.0,  // dz_7_4 mm
+    0.0,  // dalpha_7_4 rad
+    0.0,  // dbeta_7_4 rad
+    0.0,  // dgamma_7_4 rad
     // effects.scale
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // effects.backlash
@@ -707,7 +725,7 @@ inline constexpr double kCalibrationValues_float[289] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kCalibrationCrc_float = 0xAA69C94Cu;
+inline constexpr std::uint32_t kCalibrationCrc_float = 0x74E007A4u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kCalibrationTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kCalibrationValues_float, kCalibrationCrc_float);
 static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_float,
@@ -715,7 +733,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_fl
 static_assert(::kincal::validate_table(kCalibrationTable_float, kLimits_float) == ::kincal::CompensationStatus::Ok,
               "Calibration table (float): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kNominalValues_float[289] = {
+inline constexpr double kNominalValues_float[295] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -901,6 +919,12 @@ inline constexpr double kNominalValues_float[289] = {
     0.0,  // dz_6_4 mm
     0.0,  // dalpha_6_4 rad
     0.0,  // dbeta_6_4 rad
+    0.0,  // dx_7_4 mm
+    0.0,  // dy_7_4 mm
+    0.0,  // dz_7_4 mm
+    0.0,  // dalpha_7_4 rad
+    0.0,  // dbeta_7_4 rad
+    0.0,  // dgamma_7_4 rad
     // effects.scale
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // effects.backlash
@@ -932,7 +956,7 @@ inline constexpr double kNominalValues_float[289] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kNominalCrc_float = 0x87BEE295u;
+inline constexpr std::uint32_t kNominalCrc_float = 0x31EBE5DEu;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kNominalTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kNominalValues_float, kNominalCrc_float);
 static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,

@@ -11,7 +11,7 @@
 // The loop is the controller's per-point work without I/O: the pose of the
 // point (x, y, z, rx, ry, rz → R = Rz·Ry·Rx) and Compensator::compensate with
 // the example's calibration table (the full identified hybrid model: encoder
-// offsets and 150 structural errors, seed 000 Eq. (16)). The points sweep the
+// offsets and 156 structural errors, seed 000 Eq. (16) with the end frames). The points sweep the
 // task cuboid with small tool tilts, so IK and B·Δχ see varied configurations.
 #include "kincal/core/compensation.hpp"
 #include KINCAL_CALIBRATION_TABLE_HEADER

@@ -12,7 +12,7 @@
 //     + the 42 identified B_i, P_i, l_i errors); compensation is the IK of the
 //     calibrated geometry (seed 001 Section 5).
 //   hybrid (seed 000): the nominal geometry, the total encoder offsets ξ̂
-//     (coarse + fine, Eq. (15)) and the structural source errors Δχ̂ (150, in
+//     (coarse + fine, Eq. (15)) and the structural source errors Δχ̂ (156, in
 //     identify's HybridErrorModel order, encoder entries 0) for the predicted
 //     error twist $_t = B·Δχ̂ of Eq. (16); `up_split` is e = |A44 A64| of seed
 //     000 Table 1, where the wrist's first error frame sits.
@@ -64,7 +64,7 @@ enum class MachineFamily : std::uint8_t {
 
 // Size of Δχ of the hybrid (seed 000 Eq. (7)): 6 encoder offsets + 144
 // structural errors (identify/hybrid_error_model.hpp).
-inline constexpr int kHybridSourceErrorCount = 150;
+inline constexpr int kHybridSourceErrorCount = 156;  // HybridErrorLayout: seed 000's 150 + the tool frame's 6
 
 namespace table_detail {
 template <class A, class F> constexpr void each(A& array, F& f) {

@@ -30,8 +30,11 @@
 //     frame 3 = Rp (P along w), all at A0.
 //   wrist: frame 4 = [Rp·y0, −Rp·x0, w] at A44 = (c − e)·w, frame 5 = [w, −F4·y, F4·x]
 //     at Q, frame 6 = [F5·x, −F5·z, F5·y] at P0 (F4, F5 of core/hybrid.hpp).
+//   the tool frame ("frame 7", issue #31: the last body's own errors) F6·C
+//     at P (tool = F6·C·E).
 // Component order per frame: (Δx, Δy, Δz, Δα, Δβ, Δγ) in that frame, with Δz
-// omitted for a prismatic and Δγ for a revolute joint frame (Appendix A).
+// omitted for a prismatic and Δγ for a revolute joint frame (Appendix A); the
+// tool frame keeps all six.
 #pragma once
 
 #include "kincal/core/hybrid.hpp"
@@ -48,16 +51,19 @@
 namespace kincal {
 
 // Layout of Δχ (identify's HybridErrorModel): 6 encoder offsets, then the Δη of
-// UPS limbs 1..3 (36 each), the UP limb (21) and the wrist (15).
+// UPS limbs 1..3 (36 each), the UP limb (21) and the wrist (15) — seed 000's
+// 150 — then the tool frame's 6.
 struct HybridErrorLayout {
   static constexpr int kEncoders = 6;
   static constexpr int kUpsCount = 36;
   static constexpr int kUpCount = 21;
   static constexpr int kWristCount = 15;
+  static constexpr int kEndCount = 6;
   static constexpr int ups(int i) { return kEncoders + kUpsCount * i; }
   static constexpr int up() { return kEncoders + 3 * kUpsCount; }
   static constexpr int wrist() { return up() + kUpCount; }
-  static constexpr int size() { return wrist() + kWristCount; }
+  static constexpr int tool() { return wrist() + kWristCount; }
+  static constexpr int size() { return tool() + kEndCount; }
   // Whether entry k is an angle (rad) rather than a length (mm), as identify's
   // HybridErrorParameter::angular() (a host test compares all 150): the wrist's
   // three encoder offsets (entries 3..5); in every error frame its Δα, Δβ, Δγ
@@ -67,6 +73,7 @@ struct HybridErrorLayout {
   // first four, the wrist's three are revolute.
   static constexpr bool angular(int k) {
     if (k < kEncoders) return k >= 3;
+    if (k >= tool()) return k - tool() >= 3;
     if (k >= wrist()) return (k - wrist()) % 5 >= 3;
     const int e = k < up() ? (k - kEncoders) % kUpsCount : k - up();  // entry within its limb
     if (e < 6) return e >= 3;
@@ -74,7 +81,8 @@ struct HybridErrorLayout {
     return frame == 3 ? c >= 2 : c >= 3;
   }
 };
-static_assert(HybridErrorLayout::size() == 150, "seed 000 Eq. (7): 150 source errors");
+static_assert(HybridErrorLayout::tool() == 150, "seed 000 Eq. (7): 150 source errors, then the tool frame");
+static_assert(HybridErrorLayout::size() == 156, "150 + the tool frame's 6");
 
 // hybrid_frames_at_pose (the frames at a pose, without joint limits) is in
 // hybrid.hpp: hybrid_ik is built on it.
@@ -188,7 +196,7 @@ Status hybrid_wrenches(const HybridGeometry<Scalar>& g, const HybridFrames<Scala
 
 // $_t = B·Δχ at the configuration `f` (hybrid_frames_at_pose) with J_P
 // factorised by hybrid_wrenches, as (v at P, ω) in {R}: exactly the twist
-// identify's error_jacobian(pose)·Δχ gives. `errors` points at the 150
+// identify's error_jacobian(pose)·Δχ gives. `errors` points at the 156
 // entries of Δχ (HybridErrorLayout). Writes `twist` only on Ok (InvalidInput
 // if it is not finite).
 //
@@ -257,9 +265,12 @@ KINCAL_TWIST_NOINLINE void up_limb_error(const HybridFrames<Scalar>& f, const Sc
 // The wrist in series (Eq. (6)): its structural errors (Eq., 15
 // entries) and its encoder offsets Δθ_j along the joint screws, added to `t`
 // (in {R0}, at P).
+// `tool`: the tool frame's six errors in the tool frame F6·C at P
+// (tool = F6·C·E): a twist (R·Δp, R·Δθ) at P.
 template <class Scalar>
-KINCAL_TWIST_NOINLINE void add_wrist_errors(Twist<Scalar>& t, const HybridFrames<Scalar>& f, Scalar up_split,
-                                            const Scalar* e, const Scalar* encoders) {
+KINCAL_TWIST_NOINLINE void add_wrist_errors(Twist<Scalar>& t, const HybridGeometry<Scalar>& g,
+                                            const HybridFrames<Scalar>& f, Scalar up_split, const Scalar* e,
+                                            const Scalar* encoders, const Scalar* tool) {
   const Vec3<Scalar>& P = f.P;
   const Vec3<Scalar> A44 = (f.extension - up_split) * f.w;
   add_wrist_frame<Scalar>(t, f.Rp.col(1), f.Rp.col(0), f.w, A44 - P, e);                // [Rp·y0, −Rp·x0, w]
@@ -270,6 +281,9 @@ KINCAL_TWIST_NOINLINE void add_wrist_errors(Twist<Scalar>& t, const HybridFrames
   add_joint_screw<Scalar>(t, f.w, A44, P, encoders[0]);
   add_joint_screw<Scalar>(t, f.F4.col(0), f.Q, P, encoders[1]);
   add_joint_screw<Scalar>(t, f.F5.col(1), f.P0, P, encoders[2]);
+  const Mat3<Scalar> Rt = f.F6 * g.tool_offset;
+  t.template head<3>() += Rt * Vec3<Scalar>(tool[0], tool[1], tool[2]);
+  t.template tail<3>() += Rt * Vec3<Scalar>(tool[3], tool[4], tool[5]);
 }
 
 }  // namespace hybrid_twist_detail
@@ -287,7 +301,7 @@ Status hybrid_error_twist(const HybridGeometry<Scalar>& g, const HybridErrorRefe
   hybrid_twist_detail::up_limb_error(f, errors + L::up(), b.data() + 3);
   Twist<Scalar> out = w.lu.solve(b);
   out.template tail<3>() *= Scalar(1) / g.characteristic_length;  // J_P was solved in scaled unknowns
-  hybrid_twist_detail::add_wrist_errors(out, f, ref.up_split, errors + L::wrist(), errors + 3);
+  hybrid_twist_detail::add_wrist_errors(out, g, f, ref.up_split, errors + L::wrist(), errors + 3, errors + L::tool());
   // Eq. (8): into the workpiece frame {R}.
   const Mat3<Scalar>& Rw = g.workpiece_rotation;
   Twist<Scalar> result;

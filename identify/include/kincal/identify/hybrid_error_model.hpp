@@ -36,7 +36,7 @@ struct HybridErrorParameter {
   std::string name;    // stable: "dxi_3_1" = Δξ_{a,3,1}, "dx_2_1" = Δx_{2,1}, "dalpha_0_4" = Δα_{0,4}
   std::string symbol;  // seed 000's symbol, e.g. "Δx_{2,1}", "Δξ_{a,3,1}"
   int limb = 0;        // i: 1–3 UPS limbs, 4 the UP limb and the wrist
-  int frame = 0;       // j: 0 (base frame) … 6
+  int frame = 0;       // j: 0 (base frame) … 6, 7 the end frame on the last body
   int component = 0;   // 0..5 = x, y, z, α, β, γ of {R_j,i}; 6 = encoder offset Δξ
   bool encoder() const { return component == 6; }
   bool angular() const { return component == 6 ? limb == 4 : component >= 3; }  // wrist encoders are angles
@@ -102,9 +102,22 @@ class HybridErrorModel {
   // Column layout of Δχ (seed 000 Eq. (7)): the 6 encoder offsets Δξ first
   // (dxi_3_1, dxi_3_2, dxi_3_3, dxi_4_4, dxi_5_4, dxi_6_4), then Δη limb by
   // limb: UPS limbs 1, 2, 3 (frames 0–6: 6 + 6·5 = 36 each), the UP limb
-  // (frames 0–3: 6 + 3·5 = 21), the wrist (frames 4–6: 15). 150 in all.
+  // (frames 0–3: 6 + 3·5 = 21), the wrist (frames 4–6: 15) — seed 000's
+  // 150 — then the tool frame on joint 6's body, six errors ("frame 7" of
+  // limb 4; issue #31: without it nothing after the last joint could be
+  // identified). 156 in all. It comes last so that the first 150 keep seed
+  // 000's order and a model written before it reads the same. The UPS
+  // limbs' ends (the S centres on the platform) need no frame of their own:
+  // their S joint's Δη_4..6 and Δξ span them (docs/hybrid-error-model.md §3;
+  // an attachment frame tried beside them made the effect fits wander,
+  // dy_5_1 = 12 mm, for 0.1 µm less on held-out poses).
   static constexpr int kEncoderCount = 6;
-  static constexpr int kParameterCount = 150;
+  static constexpr int kSeedParameterCount = 150;
+  static constexpr int kEndFrameCount = 6;
+  static constexpr int kParameterCount = kSeedParameterCount + kEndFrameCount;
+  // Index in Δχ of chain c's end frame errors (4: the tool frame), −1 for a
+  // chain without (the UPS limbs and the UP limb).
+  static constexpr int end_frame_index(int c) { return c == 4 ? kSeedParameterCount : -1; }
 
   explicit HybridErrorModel(const HybridGeometry<double>& nominal, const HybridErrorModelOptions& options = {});
 
@@ -112,7 +125,9 @@ class HybridErrorModel {
   const std::vector<HybridErrorParameter>& parameters() const { return params_; }
   int size() const { return kParameterCount; }
   int index_of(std::string_view name) const;  // −1 if unknown
-  // Chains: 0–2 the UPS limbs, 3 the UP limb, 4 the wrist.
+  // Chains: 0–2 the UPS limbs, 3 the UP limb, 4 the wrist. Their Δη (the
+  // `eta` of chain_frames) start at chain(c).first_parameter; the end frames
+  // at end_frame_index(c).
   const HybridChain& chain(int c) const { return chains_[static_cast<std::size_t>(c)]; }
   // The UPS S-joint attachment frame on the platform (platform-frame coordinates).
   const Pose<double>& attachment(int i) const { return attach_[static_cast<std::size_t>(i)]; }
@@ -138,7 +153,12 @@ class HybridErrorModel {
 
   // Frames of chain c at joint values x (nominal when `eta` is null; else
   // `eta` points at the chain's Δη block of Δχ), with parent pose `parent`.
-  HybridChainFrames chain_frames(int c, const Pose<double>& parent, const double* x, const double* eta) const;
+  // `end_eta` (the wrist only: its six tool-frame errors, end_frame_index(4))
+  // moves the end frame on joint 6's body: end = T·L_end·E. A UPS limb's end
+  // errors belong to the platform, so they move its closure target
+  // (platform·attachment·E), not the chain.
+  HybridChainFrames chain_frames(int c, const Pose<double>& parent, const double* x, const double* eta,
+                                 const double* end_eta = nullptr) const;
   // Frames of nominal UPS chain i (0–2) closed on the platform pose (in {R0});
   // false if the closure fails.
   bool ups_frames(int i, const Pose<double>& platform, HybridChainFrames& frames) const;

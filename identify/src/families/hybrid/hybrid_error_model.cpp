@@ -156,7 +156,18 @@ HybridErrorModel::HybridErrorModel(const HybridGeometry<double>& nominal, const 
         add(c.first_joint + j, comp);
       }
   }
-  if (static_cast<int>(params_.size()) != kParameterCount || next_param != kParameterCount)
+  // The end frame on the last body (frame 7; end_frame_index): the tool frame
+  // on joint 6's body.
+  for (int ci : {kWrist}) {
+    if (static_cast<int>(params_.size()) != end_frame_index(ci))
+      throw InputError("hybrid error model: internal end-frame layout mismatch");
+    for (int comp = 0; comp < 6; ++comp) {
+      const std::string li = std::to_string(ci < kUps ? ci + 1 : 4);
+      params_.push_back({std::string("d") + kComp[comp] + "_7_" + li, std::string(kSym[comp]) + "_{7," + li + "}",
+                         ci < kUps ? ci + 1 : 4, 7, comp});
+    }
+  }
+  if (static_cast<int>(params_.size()) != kParameterCount || next_param != kSeedParameterCount)
     throw InputError("hybrid error model: internal parameter count mismatch");
 }
 
@@ -167,7 +178,7 @@ int HybridErrorModel::index_of(std::string_view name) const {
 }
 
 HybridChainFrames HybridErrorModel::chain_frames(int ci, const Pose<double>& parent, const double* x,
-                                                 const double* eta) const {
+                                                 const double* eta, const double* end_eta) const {
   const HybridChain& c = chains_[static_cast<std::size_t>(ci)];
   HybridChainFrames out;
   Pose<double> T = parent * c.base;
@@ -196,6 +207,7 @@ HybridChainFrames HybridErrorModel::chain_frames(int ci, const Pose<double>& par
     k += 5;
   }
   out.end = T * c.end;
+  if (end_eta != nullptr) out.end = out.end * error_transform(Eigen::Map<const Vec6d>(end_eta));
   return out;
 }
 
@@ -261,7 +273,8 @@ HybridActualFkReport HybridErrorModel::actual_fk(const Eigen::Ref<const Eigen::V
     report.closure = closure;
     if (report.residual < tol) {
       const double xw[3] = {physical(3), physical(4), physical(5)};
-      const Pose<double> T = chain_frames(kWrist, up.end, xw, eta + chains_[kWrist].first_parameter).end;
+      const Pose<double> T =
+          chain_frames(kWrist, up.end, xw, eta + chains_[kWrist].first_parameter, eta + end_frame_index(kWrist)).end;
       Pose<double> out;
       out.R = g_.workpiece_rotation * T.R;
       out.p = g_.workpiece_rotation * (T.p - g_.workpiece_origin);
@@ -344,6 +357,9 @@ Status HybridErrorModel::error_jacobian(const HybridPassive<double>& s, const Ve
   const Eigen::Matrix<double, 3, kUpParams> Gc = Wc * A4;
   Bf.middleCols<kUpParams>(chains_[kUp].first_parameter).noalias() = JPinv.rightCols<3>() * Gc;
   chain_error_adjoints(wr, P, Bf.middleCols<kWristParams>(chains_[kWrist].first_parameter));
+  // The tool frame (frame 7): its error E (tool = T·L_end·E, at P) is its
+  // own adjoint there.
+  Bf.middleCols<kEndFrameCount>(end_frame_index(kWrist)) = adjoint(wr.end.R, Vec3d(wr.end.p - P));
   // Eq. (8): into the workpiece frame {R}.
   const Mat3d& Rw = g_.workpiece_rotation;
   Bf.topRows<3>() = (Rw * Bf.topRows<3>()).eval();
