@@ -1,0 +1,81 @@
+// Issue #31 ("the 6-UPS likewise"): the 6-UPS identified and compensated on
+// data kincal did not make. The machine is independent/stewart_simulator.hpp:
+// its own Newton FK over legs solved as lines beside their U centres, with
+// physical errors by group (base and platform joint centres, leg offsets —
+// the prismatic line not through the U centre, which kincal's 42-parameter
+// model has no parameter for —, encoder offsets, a tool frame on the
+// platform) — not stewart_fk, not StewartErrorModel. The loop is the user's,
+// through the command line (independent/cli_loop.hpp).
+//
+// What differs from the data the code was developed on: random poses over
+// a box with tilts up to ±0.08 rad (not seed 001's 10 poses), errors by
+// physical group (not seed 001's Table 3), a tool frame offset from the
+// platform frame, three targets on the platform as well as full poses, no
+// noise level given.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "independent/cli_loop.hpp"
+#include "independent/stewart_simulator.hpp"
+
+namespace {
+
+namespace ind = kincal::independent;
+using V6 = kincal::Vec6<double>;
+
+const std::string kDir = "identify_independent_stewart";
+
+std::vector<V6> random_poses(int n, std::uint64_t seed) {
+  V6 centre, half;
+  // Inside seed 001's leg stroke at every pose (compensate refuses a pose
+  // past the robot file's limits, and that is not this test's subject).
+  centre << 0, 0, 195, 0, 0, 0;
+  half << 30, 30, 20, 0.08, 0.08, 0.08;
+  return ind::random_box_poses(n, centre, half, seed);
+}
+
+// The built-in 6-UPS with three tracker targets on its platform.
+std::string robot_with_targets() {
+  const kincal_test::ToolRun r =
+      kincal_test::run_tool_in(kDir, "robot --robot stewart-seed001 --out " + kDir + "/stewart.json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  std::string text = kincal::identify::read_text_file(kDir + "/stewart.json");
+  const std::size_t brace = text.find('{');
+  text.insert(brace + 1, "\"targets\": [[60, 0, 20], [-30, 52, 20], [-30, -52, 40]],");
+  kincal_test::write_in(kDir, "stewart_targets.json", text);
+  return kDir + "/stewart_targets.json";
+}
+
+// Noise-free, each physical group alone at 0.1 mm / 0.3 mrad: the issue's
+// bar, 0.05 µm / 0.2 µrad on held-out poses after compensation.
+TEST(IndependentStewart, EachPhysicalGroupIsAbsorbedAndCompensated) {
+  const std::vector<V6> cal = random_poses(60, 4101), test = random_poses(30, 4102);
+  const std::string targets_robot = robot_with_targets();
+  for (const bool full_pose : {true, false}) {
+    ind::MeasurementSpec spec;
+    if (!full_pose) spec.targets = {{60, 0, 20}, {-30, 52, 20}, {-30, -52, 40}};
+    for (const std::string& group : ind::StewartErrors::group_names()) {
+      const ind::StewartErrors e = ind::random_stewart_errors(0.1, 3e-4, 23, {group});
+      const std::string name = std::string(full_pose ? "pose" : "targets") + "_" + group;
+      const ind::HeldOut h = ind::identify_and_compensate(
+          kDir, full_pose ? "stewart-seed001" : targets_robot, name, ind::StewartSimulator(e),
+          ind::make_stewart_dataset(e, cal, spec), test, full_pose ? nullptr : &spec.targets);
+      std::printf("  %-26s held-out RMS %.4f um, worst %.4f um, %.4f urad, targets %.4f um (%d poses)\n",
+                  name.c_str(), h.rms_um, h.position_um, h.rotation_urad, h.target_um, h.poses);
+      EXPECT_EQ(h.poses, int(test.size())) << name;
+      if (full_pose) {
+        EXPECT_LE(h.position_um, 0.05) << name;
+        EXPECT_LE(h.rotation_urad, 0.2) << name;
+      } else {
+        // The platform frame is the fit's convention (docs/identify.md): the
+        // targets are what the machine is judged by.
+        EXPECT_LE(h.target_um, 0.05) << name;
+      }
+    }
+  }
+}
+
+}  // namespace
