@@ -135,6 +135,63 @@ inline HybridErrors random_hybrid_errors(double length, double angle, std::uint6
   return e;
 }
 
+// ------------------------------------------------------------------ physical effects
+
+// Physical effects beyond the geometry (issue #31, "the diagnosis on
+// independent data"): this simulator's own implementation, written from the
+// physics, not kincal's effect code (core/effects.hpp). All zero = off (the
+// default), and then fk(q, inputs) is fk(q). Joints j = 0..5 are the commands
+// q1..q6 (UPS legs in mm, wrist angles in rad). Applied in this order to the
+// command q_j, giving the joint value the mechanism has before the encoder
+// offset is added:
+//   scale      the encoder / lead-screw reads short or long: value = q·(1 + s_j)
+//   cyclic     screw cyclic error of the three UPS legs, a sinusoid of the
+//              commanded length with the screw lead (5 mm, as the robot
+//              description's default): + A_i·sin(2π q_i / lead + φ_i)
+//   ramp       OUTSIDE the library: a lead error in the upper stroke of one
+//              leg, + slope·max(0, q − knee) (a kink no candidate has)
+//   backlash   lost motion b_j: the joint stops b_j/2 short of the command in
+//              the direction it approached from: − (b_j/2)·dir_j
+//   compliance axial deflection of each UPS leg (and torsion of each wrist
+//              joint) under a unit weight at the tool point along −z of the
+//              base frame {R0}: + k_j·τ_j, τ_j = F·∂p/∂q_j, the static joint
+//              load by virtual work, with ∂p/∂q_j by central differences of
+//              THIS machine's FK (its actual, erroneous geometry) at the
+//              undeflected joint values. kincal's `compliance` uses the same
+//              virtual-work load but from its NOMINAL model's analytic
+//              Jacobian at the commanded pose; the difference is second
+//              order (geometry errors × deflection).
+//   thermal    uniform expansion of the whole structure and its actuators
+//              (lengths × (1 + c·(T − 20 °C))): the mechanism stays similar
+//              to itself, so every point of it moves away from the base
+//              origin A0 (origin of {R0}) by that factor, orientations kept.
+//              Applied as that similarity to the reached tool frame.
+struct HybridEffects {
+  std::array<double, 6> scale{0, 0, 0, 0, 0, 0};       // 1
+  std::array<double, 6> backlash{0, 0, 0, 0, 0, 0};    // full lost motion, mm (legs) / rad (wrist)
+  std::array<double, 6> compliance{0, 0, 0, 0, 0, 0};  // deflection per unit load, mm (rad) per unit weight
+  double thermal = 0;                                  // 1/°C
+  std::array<double, 3> cyclic_amplitude{0, 0, 0};     // mm, UPS legs
+  std::array<double, 3> cyclic_phase{0, 0, 0};         // rad
+  double screw_lead = 5.0;                             // mm
+  int ramp_joint = -1;                                 // outside the library: joint 0..5, −1 = off
+  double ramp_knee = 0, ramp_slope = 0;                // mm (rad), 1
+  bool any() const {
+    for (int j = 0; j < 6; ++j)
+      if (scale[std::size_t(j)] != 0 || backlash[std::size_t(j)] != 0 || compliance[std::size_t(j)] != 0) return true;
+    for (double a : cyclic_amplitude)
+      if (a != 0) return true;
+    return thermal != 0 || (ramp_joint >= 0 && ramp_slope != 0);
+  }
+};
+
+// What the effects need besides the commands: the structure temperature and
+// the approach direction of each joint (+1: the command last increased).
+struct HybridInputs {
+  double temp = 20;
+  V6 dir = V6::Ones();
+};
+
 // ------------------------------------------------------------------ simulator
 
 struct HybridFkResult {
@@ -159,7 +216,8 @@ class HybridSimulator {
   static constexpr double kReferenceExtension = 850.0;  // c at the reference configuration
   static constexpr double kBeta = kPi / 6.0;
 
-  explicit HybridSimulator(const HybridErrors& e = HybridErrors{}) : errors_(e) {
+  explicit HybridSimulator(const HybridErrors& e = HybridErrors{}, const HybridEffects& fx = HybridEffects{})
+      : errors_(e), effects_(fx) {
     const V3 x0 = V3::UnitX(), y0 = V3::UnitY(), z0 = V3::UnitZ();
     const double c0 = kReferenceExtension;
     // UP limb: U at A0 = Rx(θ1)·Ry(θ2) in core; here two lines through A0.
@@ -200,6 +258,50 @@ class HybridSimulator {
   }
 
   const HybridErrors& errors() const { return errors_; }
+  const HybridEffects& effects() const { return effects_; }
+
+  // The joint values the mechanism has for commands q under the effects
+  // (see HybridEffects; the encoder offsets are added by fk).
+  V6 effective_joints(const V6& q, const HybridInputs& in) const {
+    const HybridEffects& fx = effects_;
+    V6 v = q;
+    for (int j = 0; j < 6; ++j) {
+      v(j) = q(j) * (1.0 + fx.scale[std::size_t(j)]);
+      if (j < 3) v(j) += fx.cyclic_amplitude[std::size_t(j)] * std::sin(2.0 * kPi * q(j) / fx.screw_lead + fx.cyclic_phase[std::size_t(j)]);
+      if (j == fx.ramp_joint) v(j) += fx.ramp_slope * std::max(0.0, q(j) - fx.ramp_knee);
+      v(j) -= 0.5 * fx.backlash[std::size_t(j)] * (in.dir(j) < 0 ? -1.0 : 1.0);
+    }
+    bool compliant = false;
+    for (double k : fx.compliance) compliant = compliant || k != 0;
+    if (compliant) {
+      const V3 F(0, 0, -1);  // unit weight, −z of {R0}
+      const V6 v0 = v;
+      for (int j = 0; j < 6; ++j) {
+        if (fx.compliance[std::size_t(j)] == 0) continue;
+        const double h = j < 3 ? 1e-3 : 1e-6;
+        V6 a = v0, b = v0;
+        a(j) += h;
+        b(j) -= h;
+        const auto ra = fk(a), rb = fk(b);
+        if (!ra.ok || !rb.ok) return V6::Constant(std::nan(""));
+        const V3 dp = wR0_.transpose() * (ra.pose.p - rb.pose.p) / (2 * h);  // ∂p/∂q_j in {R0}
+        v(j) += fx.compliance[std::size_t(j)] * F.dot(dp);
+      }
+    }
+    return v;
+  }
+
+  // FK with the effects: tool pose in {R} for commands q at `in`.
+  HybridFkResult fk(const V6& q, const HybridInputs& in) const {
+    if (!effects_.any()) return fk(q);
+    HybridFkResult r = fk(effective_joints(q, in));
+    if (r.ok && effects_.thermal != 0) {
+      const double eps = effects_.thermal * (in.temp - 20.0);
+      const V3 p0 = wR0_.transpose() * r.pose.p + origin_;  // tool point in {R0}, A0 at its origin
+      r.pose.p = wR0_ * ((1.0 + eps) * p0 - origin_);
+    }
+    return r;
+  }
   const UpsLeg& leg(int i) const { return legs_[std::size_t(i)]; }
   const M3& workpiece_rotation() const { return wR0_; }
   const V3& workpiece_origin() const { return origin_; }
@@ -352,6 +454,7 @@ class HybridSimulator {
 
  private:
   HybridErrors errors_;
+  HybridEffects effects_;
   std::array<JointLine, 6> joints_;  // S1 (U, x0), S2 (U, y0), S3 (P), S4, S5, S6 (wrist)
   Rigid M_;                          // tool frame at the reference configuration, {R0}
   M3 wR0_, C_;
@@ -365,6 +468,71 @@ class HybridSimulator {
 inline Dataset make_hybrid_dataset(const HybridErrors& errors, const std::vector<V6>& commanded,
                                    const MeasurementSpec& spec) {
   return make_dataset(HybridSimulator(errors), HybridSimulator(), commanded, spec);
+}
+
+// Dataset of the erroneous machine with effects, commanded in the order given
+// (motion order) by the nominal IK: each row's approach directions are the
+// signs of the command change from the previous row (kept while a joint
+// stands still; +1 from the home pose, the reference pose, as kincal's
+// controller starts), `temps[k]` its temperature (empty: 20 °C), `roles[k]`
+// its role (empty: cal). The CSV then carries role, temp and dir1..dir6.
+// Noise as make_dataset (the same draws for the same seed and rows).
+inline Dataset make_hybrid_effect_dataset(const HybridErrors& errors, const HybridEffects& effects,
+                                          const std::vector<V6>& commanded, const MeasurementSpec& spec,
+                                          const std::vector<double>& temps = {},
+                                          const std::vector<std::string>& roles = {}) {
+  const HybridSimulator actual(errors, effects), nominal;
+  Dataset out;
+  out.target_count = int(spec.targets.size());
+  out.has_measured = spec.targets.empty() || spec.pose_and_targets;
+  out.has_q = spec.write_q;
+  out.has_role = !roles.empty();
+  out.has_temp = !temps.empty();
+  out.has_dir = true;
+  std::mt19937_64 rng(spec.seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
+  V6 previous;
+  if (!nominal.ik(Pose<double>(), previous)) throw std::runtime_error("no home pose");
+  V6 dir = V6::Ones();
+  for (std::size_t i = 0; i < commanded.size(); ++i) {
+    DatasetRow row;
+    row.id = "n" + std::to_string(i + 1);
+    row.commanded = commanded[i];
+    if (!nominal.ik(Pose<double>::from_xyz_rpy(commanded[i]), row.q)) {
+      out.skipped.push_back(std::to_string(i) + ": nominal IK failed");
+      continue;
+    }
+    for (int j = 0; j < 6; ++j)
+      if (row.q(j) != previous(j)) dir(j) = row.q(j) > previous(j) ? 1.0 : -1.0;
+    previous = row.q;
+    HybridInputs in;
+    in.dir = dir;
+    if (!temps.empty()) in.temp = temps[i];
+    row.temp = in.temp;
+    row.dir = dir;
+    if (!roles.empty()) row.role = roles[i];
+    const auto reached = actual.fk(row.q, in);
+    if (!reached.ok) {
+      out.skipped.push_back(std::to_string(i) + ": actual FK failed");
+      continue;
+    }
+    row.actual = reached.pose;
+    if (out.has_measured) {
+      V6 m = reached.pose.to_xyz_rpy();
+      for (int k = 0; k < 3; ++k) m(k) += noise(spec.sigma_mm);
+      for (int k = 3; k < 6; ++k) m(k) += noise(spec.sigma_rad);
+      row.measured = m;
+    }
+    const Pose<double> seen = spec.instrument_from_base * reached.pose;
+    for (const V3& t : spec.targets) {
+      V3 y = seen.transform(t);
+      for (int k = 0; k < 3; ++k) y(k) += noise(spec.sigma_mm);
+      row.targets.push_back(y);
+    }
+    out.rows.push_back(row);
+  }
+  return out;
 }
 
 }  // namespace kincal::independent

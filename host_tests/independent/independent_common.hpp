@@ -281,6 +281,10 @@ struct DatasetRow {
   Pose<double> actual;        // noise-free pose the erroneous machine reached
   std::optional<V6> measured;
   std::vector<V3> targets;    // measured target positions
+  // Optional covariates (written only where the Dataset's flags below say so):
+  std::string role;           // "cal" / "test" (`role` column)
+  double temp = 20;           // structure temperature, °C (`temp` column)
+  V6 dir = V6::Ones();        // approach direction of each joint, ±1 (`dir1..dir6` columns)
 };
 
 struct Dataset {
@@ -288,6 +292,7 @@ struct Dataset {
   std::vector<std::string> skipped;  // "index: why" for poses the nominal IK or the actual FK refused
   int target_count = 0;
   bool has_measured = false, has_q = true;
+  bool has_role = false, has_temp = false, has_dir = false;  // extra columns (default: none, as before)
 };
 
 // Runs `commanded` poses through nominal IK → actual FK → instrument.
@@ -340,7 +345,8 @@ Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::ve
 // ------------------------------------------------------------------ CSV writer
 
 // kincal's measurement CSV v1 (docs/formats.md), the column groups in the order
-// identify's write_pose_table uses: id, x..rz, [mx..mrz], [t1x..tkz], [q1..q6].
+// identify's write_pose_table uses: id, x..rz, [mx..mrz], [t1x..tkz], [q1..q6];
+// then, where the Dataset's flags ask, [role], [temp], [dir1..dir6].
 // Numbers with 17 significant digits (read back to the same double).
 inline std::string csv_number(double v) {
   char buf[40];
@@ -353,6 +359,9 @@ inline void write_measurement_csv(std::ostream& out, const Dataset& d) {
   if (d.has_measured) out << ",mx,my,mz,mrx,mry,mrz";
   for (int k = 1; k <= d.target_count; ++k) out << ",t" << k << "x,t" << k << "y,t" << k << "z";
   if (d.has_q) out << ",q1,q2,q3,q4,q5,q6";
+  if (d.has_role) out << ",role";
+  if (d.has_temp) out << ",temp";
+  if (d.has_dir) out << ",dir1,dir2,dir3,dir4,dir5,dir6";
   out << "\n";
   for (const DatasetRow& r : d.rows) {
     out << r.id;
@@ -363,6 +372,10 @@ inline void write_measurement_csv(std::ostream& out, const Dataset& d) {
       for (int k = 0; k < 3; ++k) out << "," << csv_number(t(k));
     if (d.has_q)
       for (int k = 0; k < 6; ++k) out << "," << csv_number(r.q(k));
+    if (d.has_role) out << "," << (r.role.empty() ? "cal" : r.role);
+    if (d.has_temp) out << "," << csv_number(r.temp);
+    if (d.has_dir)
+      for (int k = 0; k < 6; ++k) out << "," << (r.dir(k) < 0 ? "-1" : "1");
     out << "\n";
   }
 }
