@@ -517,19 +517,7 @@ inline Dataset make_hybrid_effect_dataset(const HybridErrors& errors, const Hybr
       out.skipped.push_back(std::to_string(i) + ": actual FK failed");
       continue;
     }
-    row.actual = reached.pose;
-    if (out.has_measured) {
-      V6 m = reached.pose.to_xyz_rpy();
-      for (int k = 0; k < 3; ++k) m(k) += noise(spec.sigma_mm);
-      for (int k = 3; k < 6; ++k) m(k) += noise(spec.sigma_rad);
-      row.measured = m;
-    }
-    const Pose<double> seen = spec.instrument_from_base * reached.pose;
-    for (const V3& t : spec.targets) {
-      V3 y = seen.transform(t);
-      for (int k = 0; k < 3; ++k) y(k) += noise(spec.sigma_mm);
-      row.targets.push_back(y);
-    }
+    measure_row(row, reached.pose, spec, out.has_measured, noise);
     out.rows.push_back(row);
   }
   return out;

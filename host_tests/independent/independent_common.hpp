@@ -295,6 +295,26 @@ struct Dataset {
   bool has_role = false, has_temp = false, has_dir = false;  // extra columns (default: none, as before)
 };
 
+// What the instrument reads of a row whose tool reached `reached`: the noisy
+// pose (if measured) and the noisy targets, seen from the instrument frame.
+template <class Noise>
+void measure_row(DatasetRow& row, const Pose<double>& reached, const MeasurementSpec& spec, bool measured,
+                 Noise& noise) {
+  row.actual = reached;
+  if (measured) {
+    V6 m = reached.to_xyz_rpy();
+    for (int k = 0; k < 3; ++k) m(k) += noise(spec.sigma_mm);
+    for (int k = 3; k < 6; ++k) m(k) += noise(spec.sigma_rad);
+    row.measured = m;
+  }
+  const Pose<double> seen = spec.instrument_from_base * reached;
+  for (const V3& t : spec.targets) {
+    V3 y = seen.transform(t);
+    for (int k = 0; k < 3; ++k) y(k) += noise(spec.sigma_mm);
+    row.targets.push_back(y);
+  }
+}
+
 // Runs `commanded` poses through nominal IK → actual FK → instrument.
 // `nominal` needs `bool ik(const Pose<double>&, V6& q) const` (the commands for
 // a pose), `actual` needs `fk(const V6& q) const` returning `.ok` and `.pose`;
@@ -324,19 +344,7 @@ Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::ve
       out.skipped.push_back(std::to_string(i) + ": actual FK failed");
       continue;
     }
-    row.actual = reached.pose;
-    if (out.has_measured) {
-      V6 m = reached.pose.to_xyz_rpy();
-      for (int k = 0; k < 3; ++k) m(k) += noise(spec.sigma_mm);
-      for (int k = 3; k < 6; ++k) m(k) += noise(spec.sigma_rad);
-      row.measured = m;
-    }
-    const Pose<double> seen = spec.instrument_from_base * reached.pose;
-    for (const V3& t : spec.targets) {
-      V3 y = seen.transform(t);
-      for (int k = 0; k < 3; ++k) y(k) += noise(spec.sigma_mm);
-      row.targets.push_back(y);
-    }
+    measure_row(row, reached.pose, spec, out.has_measured, noise);
     out.rows.push_back(row);
   }
   return out;
