@@ -74,19 +74,21 @@ struct Agreement {
   double own_mm = 0, core_mm = 0;  // each FK against the pose core's IK started from
 };
 
-Agreement hybrid_agreement(const ind::HybridSimulator& sim, const std::vector<V6>& poses) {
+// `core_ik(X, q)` / `core_fk(q, pose)` are core's for the family; the first
+// `lengths` joints are in mm, the rest in rad.
+template <class Sim, class CoreIk, class CoreFk>
+Agreement agreement(const Sim& sim, const std::vector<V6>& poses, CoreIk core_ik, CoreFk core_fk, int lengths) {
   Agreement a;
-  const ind::HybridSimulator nominal;
+  const Sim nominal;
   for (const V6& v : poses) {
     const Pose<double> X = Pose<double>::from_xyz_rpy(v);
     kincal::Vec6<double> q_core;
-    if (kincal::hybrid_ik(hybrid_geometry(), X, q_core) != Status::Ok) continue;
+    if (core_ik(X, q_core) != Status::Ok) continue;
     Pose<double> core_pose;
-    const auto rep = kincal::hybrid_fk(hybrid_geometry(), q_core, core_pose);
-    EXPECT_EQ(rep.status, Status::Ok);
+    EXPECT_EQ(core_fk(q_core, core_pose), Status::Ok);
     V6 q_mine;
     EXPECT_TRUE(nominal.ik(X, q_mine));
-    const ind::HybridFkResult mine = sim.fk(q_core);
+    const auto mine = sim.fk(q_core);
     EXPECT_TRUE(mine.ok);
     if (!mine.ok) continue;
     ++a.poses;
@@ -94,35 +96,25 @@ Agreement hybrid_agreement(const ind::HybridSimulator& sim, const std::vector<V6
     a.fk_rad = std::max(a.fk_rad, rotation_distance(mine.pose.R, core_pose.R));
     a.own_mm = std::max(a.own_mm, (mine.pose.p - X.p).norm());
     a.core_mm = std::max(a.core_mm, (core_pose.p - X.p).norm());
-    a.ik_mm = std::max(a.ik_mm, (q_mine.head<3>() - q_core.head<3>()).cwiseAbs().maxCoeff());
-    a.ik_rad = std::max(a.ik_rad, (q_mine.tail<3>() - q_core.tail<3>()).cwiseAbs().maxCoeff());
+    const V6 dq = (q_mine - q_core).cwiseAbs();
+    a.ik_mm = std::max(a.ik_mm, dq.head(lengths).maxCoeff());
+    if (lengths < 6) a.ik_rad = std::max(a.ik_rad, dq.tail(6 - lengths).maxCoeff());
   }
   return a;
 }
 
+Agreement hybrid_agreement(const ind::HybridSimulator& sim, const std::vector<V6>& poses) {
+  return agreement(
+      sim, poses, [](const Pose<double>& X, kincal::Vec6<double>& q) { return kincal::hybrid_ik(hybrid_geometry(), X, q); },
+      [](const kincal::Vec6<double>& q, Pose<double>& p) { return kincal::hybrid_fk(hybrid_geometry(), q, p).status; },
+      3);
+}
+
 Agreement stewart_agreement(const ind::StewartSimulator& sim, const std::vector<V6>& poses) {
-  Agreement a;
-  const ind::StewartSimulator nominal;
-  for (const V6& v : poses) {
-    const Pose<double> X = Pose<double>::from_xyz_rpy(v);
-    kincal::Vec6<double> q_core;
-    if (kincal::stewart_ik(stewart_geometry(), X, q_core) != Status::Ok) continue;
-    Pose<double> core_pose;
-    const auto rep = kincal::stewart_fk(stewart_geometry(), q_core, core_pose);
-    EXPECT_EQ(rep.status, Status::Ok);
-    V6 q_mine;
-    EXPECT_TRUE(nominal.ik(X, q_mine));
-    const ind::StewartFkResult mine = sim.fk(q_core);
-    EXPECT_TRUE(mine.ok);
-    if (!mine.ok) continue;
-    ++a.poses;
-    a.fk_mm = std::max(a.fk_mm, (mine.pose.p - core_pose.p).norm());
-    a.fk_rad = std::max(a.fk_rad, rotation_distance(mine.pose.R, core_pose.R));
-    a.own_mm = std::max(a.own_mm, (mine.pose.p - X.p).norm());
-    a.core_mm = std::max(a.core_mm, (core_pose.p - X.p).norm());
-    a.ik_mm = std::max(a.ik_mm, (q_mine - q_core).cwiseAbs().maxCoeff());
-  }
-  return a;
+  return agreement(
+      sim, poses, [](const Pose<double>& X, kincal::Vec6<double>& q) { return kincal::stewart_ik(stewart_geometry(), X, q); },
+      [](const kincal::Vec6<double>& q, Pose<double>& p) { return kincal::stewart_fk(stewart_geometry(), q, p).status; },
+      6);
 }
 
 // Central difference of the tool twist of the machine with errors ±h·e at q.

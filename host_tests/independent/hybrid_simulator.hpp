@@ -482,27 +482,12 @@ inline Dataset make_hybrid_effect_dataset(const HybridErrors& errors, const Hybr
                                           const std::vector<double>& temps = {},
                                           const std::vector<std::string>& roles = {}) {
   const HybridSimulator actual(errors, effects), nominal;
-  Dataset out;
-  out.target_count = int(spec.targets.size());
-  out.has_measured = spec.targets.empty() || spec.pose_and_targets;
-  out.has_q = spec.write_q;
-  out.has_role = !roles.empty();
-  out.has_temp = !temps.empty();
-  out.has_dir = true;
-  std::mt19937_64 rng(spec.seed);
-  std::normal_distribution<double> unit(0.0, 1.0);
-  auto noise = [&](double sigma) { return sigma > 0 ? sigma * unit(rng) : 0.0; };
   V6 previous;
   if (!nominal.ik(Pose<double>(), previous)) throw std::runtime_error("no home pose");
   V6 dir = V6::Ones();
-  for (std::size_t i = 0; i < commanded.size(); ++i) {
-    DatasetRow row;
-    row.id = "n" + std::to_string(i + 1);
-    row.commanded = commanded[i];
-    if (!nominal.ik(Pose<double>::from_xyz_rpy(commanded[i]), row.q)) {
-      out.skipped.push_back(std::to_string(i) + ": nominal IK failed");
-      continue;
-    }
+  Dataset out = make_dataset_by(nominal, commanded, spec, [&](std::size_t i, DatasetRow& row) {
+    // The approach direction: the sign of the command change, kept while a
+    // joint stands still (+1 from home).
     for (int j = 0; j < 6; ++j)
       if (row.q(j) != previous(j)) dir(j) = row.q(j) > previous(j) ? 1.0 : -1.0;
     previous = row.q;
@@ -512,14 +497,11 @@ inline Dataset make_hybrid_effect_dataset(const HybridErrors& errors, const Hybr
     row.temp = in.temp;
     row.dir = dir;
     if (!roles.empty()) row.role = roles[i];
-    const auto reached = actual.fk(row.q, in);
-    if (!reached.ok) {
-      out.skipped.push_back(std::to_string(i) + ": actual FK failed");
-      continue;
-    }
-    measure_row(row, reached.pose, spec, out.has_measured, noise);
-    out.rows.push_back(row);
-  }
+    return actual.fk(row.q, in);
+  });
+  out.has_role = !roles.empty();
+  out.has_temp = !temps.empty();
+  out.has_dir = true;
   return out;
 }
 

@@ -315,13 +315,14 @@ void measure_row(DatasetRow& row, const Pose<double>& reached, const Measurement
   }
 }
 
-// Runs `commanded` poses through nominal IK → actual FK → instrument.
+// Runs `commanded` poses through nominal IK → `reach(i, row)` → instrument.
 // `nominal` needs `bool ik(const Pose<double>&, V6& q) const` (the commands for
-// a pose), `actual` needs `fk(const V6& q) const` returning `.ok` and `.pose`;
-// both simulators have both.
-template <class Actual, class Nominal>
-Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::vector<V6>& commanded,
-                     const MeasurementSpec& spec) {
+// a pose); `reach` drives the actual machine with row.q (it may fill the
+// row's inputs: temperature, directions, role) and returns its FK result
+// (`.ok`, `.pose`).
+template <class Nominal, class Reach>
+Dataset make_dataset_by(const Nominal& nominal, const std::vector<V6>& commanded, const MeasurementSpec& spec,
+                        Reach reach) {
   if (spec.targets.size() > 3) throw std::invalid_argument("at most three targets");
   Dataset out;
   out.target_count = int(spec.targets.size());
@@ -339,7 +340,7 @@ Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::ve
       out.skipped.push_back(std::to_string(i) + ": nominal IK failed");
       continue;
     }
-    const auto reached = actual.fk(row.q);
+    const auto reached = reach(i, row);
     if (!reached.ok) {
       out.skipped.push_back(std::to_string(i) + ": actual FK failed");
       continue;
@@ -348,6 +349,13 @@ Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::ve
     out.rows.push_back(row);
   }
   return out;
+}
+
+// The same with `actual.fk(q)` (both simulators have it).
+template <class Actual, class Nominal>
+Dataset make_dataset(const Actual& actual, const Nominal& nominal, const std::vector<V6>& commanded,
+                     const MeasurementSpec& spec) {
+  return make_dataset_by(nominal, commanded, spec, [&](std::size_t, DatasetRow& row) { return actual.fk(row.q); });
 }
 
 // ------------------------------------------------------------------ CSV writer

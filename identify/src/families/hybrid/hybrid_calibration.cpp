@@ -306,15 +306,13 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // independently simulated tool error (0.1 mm / 0.3 mrad) was left 0.41 µm
   // RMS instead of 0. Held, it is named among the dropped.
   constexpr double kToolFrameTolerance = 0.03;
-  std::vector<Index> tool_held;
-  for (std::size_t e = 0; e < sel_eta.size(); ++e)
-    if (sel_map[static_cast<std::size_t>(sel_eta[e])] >= HybridErrorModel::kSeedParameterCount &&
-        sel.distance[e] < kToolFrameTolerance &&
-        std::find(sel.kept.begin(), sel.kept.end(), sel_eta[e]) != sel.kept.end())
-      tool_held.push_back(sel_eta[e]);
-  for (Index c : sel.kept)
-    if (std::find(tool_held.begin(), tool_held.end(), c) == tool_held.end()) out.kept.push_back(sel_map[static_cast<std::size_t>(c)]);
-  for (Index c : tool_held) out.dropped.push_back(sel_map[static_cast<std::size_t>(c)]);
+  std::vector<double> distance(sel_map.size(), HUGE_VAL);  // per Hsel column; ξ columns are never tested
+  for (std::size_t e = 0; e < sel_eta.size(); ++e) distance[static_cast<std::size_t>(sel_eta[e])] = sel.distance[e];
+  for (Index c : sel.kept) {
+    const Index j = sel_map[static_cast<std::size_t>(c)];
+    const bool held = j >= HybridErrorModel::kSeedParameterCount && distance[static_cast<std::size_t>(c)] < kToolFrameTolerance;
+    (held ? out.dropped : out.kept).push_back(j);
+  }
   for (Index c : sel.dropped) out.dropped.push_back(sel_map[static_cast<std::size_t>(c)]);
   out.dropped.insert(out.dropped.end(), zero_cols.begin(), zero_cols.end());
   std::sort(out.dropped.begin(), out.dropped.end());
