@@ -59,17 +59,18 @@ std::string robot_with_targets() {
 }
 
 // Noise-free, each physical group alone: what the identified model leaves
-// on held-out poses after compensation, at 0.1 mm / 0.3 mrad. Measured
-// (worst pose): gauge ≤ 0.019 µm / 0.016 µrad for every group — the issue's
-// bar of 0.05 µm / 0.2 µrad; full poses 0.26 µm / 0.69 µrad (UPS joint
-// centres), 0.15 µm for the UP limb and the wrist's axis lines; three
-// tracker targets (positions fitted) 0.13, 0.23, 0.15 µm for those three
-// groups, ≤ 0.001 µm for the others. The full-pose and target fits keep a column only 1e-3 from the span of those before it
-// (hybrid_errors.cpp, tuned on noisy data); at 1e-4 every group reaches
-// ≤ 0.019 µm here but three noisy full-pose / target tests fail. Until
-// that choice depends on the noise (issue #31, open), the full-pose bars
-// below are what it reaches, not the issue's. Before the tool frame was in
-// the model the `tool` group was left 14 µm off from full poses.
+// on held-out poses after compensation, at 0.1 mm / 0.3 mrad: the issue's
+// bar, 0.05 µm / 0.2 µrad for the worst held-out pose, for full poses, the
+// gauge and three tracker targets (judged by where the fitted targets go).
+// Measured (worst group, worst pose): full pose 0.019 µm / 0.016 µrad, gauge
+// 0.019 µm / 0.015 µrad, targets 0.018 µm but the UPS joint centres (below).
+// The full-pose and target fits keep
+// columns down to 1e-4 from the span of those before them on noise-free
+// data (hybrid_errors.cpp); at 1e-3, the tolerance noisy data need, the UPS
+// joint centres were left 0.26 µm, the UP limb and the wrist's axis lines
+// 0.15 µm. Before the tool frame was in the model the `tool` group was left
+// 14 µm off from full poses. (At 1 mm / 2 mrad the model's first-order
+// error twist is not enough: the exact model is issue #31's open part.)
 TEST(IndependentHybrid, EachPhysicalGroupIsAbsorbedAndCompensated) {
   const std::vector<V6> cal = random_poses(90, 0.1, 3101), test = random_poses(40, 0.1, 3102);
   const std::string targets_robot = robot_with_targets();
@@ -86,18 +87,17 @@ TEST(IndependentHybrid, EachPhysicalGroupIsAbsorbedAndCompensated) {
       std::printf("  %-28s held-out RMS %.4f um, worst %.4f um, %.4f urad, targets %.4f um (%d poses)\n",
                   name.c_str(), h.rms_um, h.position_um, h.rotation_urad, h.target_um, h.poses);
       EXPECT_EQ(h.poses, int(test.size())) << name;
-      if (inst == Instrument::FullPose) {
-        EXPECT_LE(h.rms_um, 0.12) << name;
-        EXPECT_LE(h.position_um, 0.3) << name;
-        EXPECT_LE(h.rotation_urad, 0.8) << name;
-      } else if (inst == Instrument::Gauge) {
+      if (inst == Instrument::Targets) {
+        // Fitted targets: the tool frame is the fit's convention, the
+        // targets are what the machine is judged by. The UPS joint centres
+        // miss the bar here (0.129 µm): the first-order error twist of the
+        // model (seed 000 Eq. (16)) at the fit's target-shifted estimate;
+        // the exact model (core/hybrid_exact.hpp, not yet the compensator's:
+        // issue #31) reaches 0.014 µm on the same data.
+        EXPECT_LE(h.target_um, group == "ups_joint_centres" ? 0.15 : 0.05) << name;
+      } else {
         EXPECT_LE(h.position_um, 0.05) << name;
         EXPECT_LE(h.rotation_urad, 0.2) << name;
-      } else {
-        // Fitted targets: the tool frame is the fit's convention, the
-        // targets are what the machine is judged by (the same 1e-3 column
-        // tolerance as full poses: see above).
-        EXPECT_LE(h.target_um, 0.3) << name;
       }
       if (group == "tool" && inst != Instrument::Targets) {
         EXPECT_LE(h.position_um, 1e-3) << name;  // the new frame, exactly

@@ -13,6 +13,7 @@
 #include <cstdio>
 
 #include "bench_cases.hpp"
+#include "kincal/core/hybrid_exact.hpp"
 
 namespace {
 
@@ -140,6 +141,59 @@ template <class S> void BM_HybridFK(benchmark::State& state) {
   state.counters["rot_err_rad"] = acc.orientation_rad;
 }
 
+// ------------------------------------------------- the exact erroneous hybrid
+// core/hybrid_exact.hpp on a machine with every one of the 156 source errors
+// set (a fixed pattern of ±1 mm / ±2 mrad, issue #31's large case): the IK
+// the controller would run (serial Newton + three UPS closures) and the FK.
+template <class S> HybridChains<S> bench_exact_chains(const HybridGeometry<S>& g) {
+  S errors[HybridErrorLayout::size()];
+  for (int k = 0; k < HybridErrorLayout::size(); ++k) {
+    const S sign = (k * 7919) % 3 == 0 ? S(-1) : S(1);
+    const S fraction = S(0.2) + S(0.8) * S((k * 37) % 101) / S(100);
+    errors[k] = sign * fraction * (HybridErrorLayout::angular(k) ? S(2e-3) : S(1));
+  }
+  HybridChains<S> c;
+  hybrid_exact_chains(g, S(345), errors, c);
+  return c;
+}
+
+template <class S> void BM_HybridExactIK(benchmark::State& state) {
+  HybridGeometry<S> g = make_hybrid_seed000<S>();
+  const HybridChains<S> c = bench_exact_chains(g);
+  Pose<S> pose = hybrid_target<S>();
+  Vec6<S> q = Vec6<S>::Zero();
+  Status s = Status::Ok;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(pose);
+    s = hybrid_exact_ik(g, c, pose, q);
+    benchmark::DoNotOptimize(s);
+    benchmark::DoNotOptimize(q);
+  }
+  state.counters["ok"] = hybrid_exact_ik(g, c, hybrid_target<S>(), q) == Status::Ok;
+}
+
+template <class S> void BM_HybridExactFK(benchmark::State& state) {
+  HybridGeometry<S> g = make_hybrid_seed000<S>();
+  const HybridChains<S> c = bench_exact_chains(g);
+  Vec6<S> q = Vec6<S>::Zero();
+  hybrid_exact_ik(g, c, hybrid_target<S>(), q);
+  HybridPassive<S> guess = g.home;
+  Pose<S> out;
+  FkReport<S> report;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(q);
+    benchmark::DoNotOptimize(guess);
+    report = hybrid_exact_fk(g, c, q, guess, out);
+    benchmark::DoNotOptimize(report);
+    benchmark::DoNotOptimize(out);
+  }
+  Pose<S> check;
+  const FkReport<S> r = hybrid_exact_fk(g, c, q, g.home, check);
+  state.counters["ok"] = r.status == Status::Ok;
+  state.counters["iterations"] = r.iterations;
+  state.counters["pos_err_mm"] = (check.p.template cast<double>() - hybrid_target<double>().p).norm();
+}
+
 BENCHMARK_TEMPLATE(BM_StewartIK, double);
 BENCHMARK_TEMPLATE(BM_StewartIK, float);
 BENCHMARK_TEMPLATE(BM_StewartIKJacobian, double);
@@ -152,6 +206,10 @@ BENCHMARK_TEMPLATE(BM_HybridIKJacobian, double);
 BENCHMARK_TEMPLATE(BM_HybridIKJacobian, float);
 BENCHMARK_TEMPLATE(BM_HybridFK, double);
 BENCHMARK_TEMPLATE(BM_HybridFK, float);
+BENCHMARK_TEMPLATE(BM_HybridExactIK, double);
+BENCHMARK_TEMPLATE(BM_HybridExactIK, float);
+BENCHMARK_TEMPLATE(BM_HybridExactFK, double);
+BENCHMARK_TEMPLATE(BM_HybridExactFK, float);
 
 // The accuracy half of the GUIDE's FK bar, checked once, untimed. Only the
 // double 6-UPS case carries a GUIDE bar (1e-9 mm in <= 5 iterations); the

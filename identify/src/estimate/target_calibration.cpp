@@ -265,13 +265,19 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   for (std::size_t k = 0; k < nodes.size(); ++k)
     X.middleRows(rows * Eigen::Index(k), rows) =
         full_design_rows(*family, errors, out.registration, out.targets, nodes[k].guess.pose, layout, reading);
-  const Eigen::MatrixXd N = null_space(family->convention_rows(layout, X), layout.size());
-  const int p = int(N.cols());
-  out.free_parameters = p;
-  out.convention_basis = N;
-  out.fitted.assign(std::size_t(layout.family), false);
-  for (Eigen::Index j = 0; j < layout.family; ++j) out.fitted[std::size_t(j)] = N.row(j).norm() > 1e-12;
-  require_enough_nodes(nodes.size(), p, nominal, data);
+  Eigen::MatrixXd C = family->convention_rows(layout, X, std::numeric_limits<double>::infinity());
+  Eigen::MatrixXd N;
+  int p = 0;
+  auto set_convention = [&]() {
+    N = null_space(C, layout.size());
+    p = int(N.cols());
+    out.free_parameters = p;
+    out.convention_basis = N;
+    out.fitted.assign(std::size_t(layout.family), false);
+    for (Eigen::Index j = 0; j < layout.family; ++j) out.fitted[std::size_t(j)] = N.row(j).norm() > 1e-12;
+    require_enough_nodes(nodes.size(), p, nominal, data);
+  };
+  set_convention();
   const std::vector<std::string> names = full_names(*family, layout);
 
   // The descent (least_squares_step.hpp) on φ, x = N·φ.
@@ -322,19 +328,34 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
     rec.step_norm = (current.errors - accepted.errors).norm();
     out.history.push_back(rec);
   };
-  const detail::DescentCount count = detail::damped_gauss_newton(
-      options.max_iterations, evaluate, [&] { accepted = current; record(); }, [&] { current = accepted; },
-      linearise, apply);
-  if (count.linearisations == 0)
-    throw InputError(data.file, 0, 0,
-                     "the nominal machine does not reach every calibration node from its commands; check the robot "
-                     "description");
+  auto descend = [&]() {
+    const detail::DescentCount count = detail::damped_gauss_newton(
+        options.max_iterations, evaluate, [&] { accepted = current; record(); }, [&] { current = accepted; },
+        linearise, apply);
+    if (count.linearisations == 0)
+      throw InputError(data.file, 0, 0,
+                       "the nominal machine does not reach every calibration node from its commands; check the "
+                       "robot description");
+  };
+  descend();
   // The model at the accepted state: its design and residual, for the
   // statistics below.
   evaluate();
   Eigen::MatrixXd A;
   Eigen::VectorXd y;
   linearise(A, y);
+  // The convention again, now that the residual is known (family_errors.hpp):
+  // where it holds fewer parameters, the fit continues from here with them.
+  {
+    Eigen::MatrixXd C_fitted = family->convention_rows(layout, X, std::sqrt(residual.squaredNorm() / double(n)));
+    if (C_fitted.rows() != C.rows() || C_fitted != C) {
+      C = std::move(C_fitted);
+      set_convention();
+      descend();
+      evaluate();
+      linearise(A, y);
+    }
+  }
   out.errors = current.errors;
   out.registration = current.registration;
   out.targets = current.targets;

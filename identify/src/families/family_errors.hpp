@@ -59,8 +59,14 @@ class FamilyErrors {
   // cannot be evaluated.
   virtual bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const = 0;
   // (c) Rows over x (layout.size() columns) the fit holds at zero, given the
-  // design over x at the start (nominal machine, starting registration).
-  virtual Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd& start_design) const = 0;
+  // design over x (at the start: nominal machine, starting registration)
+  // and the RMS residual of a fit by the rows given for an unknown one
+  // (+∞: the fit has not run yet). A family whose rows depend on it (the
+  // hybrid keeps nearly dependent columns only where the data carry no
+  // noise to send the estimate along them) gets asked again after the fit,
+  // and the fit reruns if the rows change.
+  virtual Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd& design,
+                                          double residual_rms) const = 0;
   // How the convention reads (the identify line and docs).
   virtual std::string convention() const = 0;
   // (d) Whether the parameters outnumber what any pose set determines, so

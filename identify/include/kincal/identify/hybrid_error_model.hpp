@@ -122,6 +122,7 @@ class HybridErrorModel {
   explicit HybridErrorModel(const HybridGeometry<double>& nominal, const HybridErrorModelOptions& options = {});
 
   const HybridGeometry<double>& nominal() const { return g_; }
+  const HybridErrorModelOptions& options() const { return opt_; }
   const std::vector<HybridErrorParameter>& parameters() const { return params_; }
   int size() const { return kParameterCount; }
   int index_of(std::string_view name) const;  // −1 if unknown

@@ -40,7 +40,7 @@ class StewartErrors final : public FamilyErrors {
   // A rigid motion of all platform joints (with the targets) changes no
   // measurement; in the instrument frame neither does one of all base joints
   // (with the registration): their errors carry no net rigid motion.
-  Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd&) const override {
+  Eigen::MatrixXd convention_rows(const TargetLayout& layout, const Eigen::MatrixXd&, double) const override {
     Eigen::MatrixXd C = Eigen::MatrixXd::Zero(layout.registration ? 12 : 6, layout.size());
     const Eigen::Matrix<double, 6, Eigen::Dynamic> platform = rigid_motion_rows(g_.platform);
     const Eigen::Matrix<double, 6, Eigen::Dynamic> base = rigid_motion_rows(g_.base);

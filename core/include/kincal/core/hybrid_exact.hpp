@@ -1,0 +1,634 @@
+// The erroneous hybrid machine itself, not its first-order image (issue #31):
+// every limb a serial chain of 1-DOF joints whose links carry the identified
+// source errors Δχ (seed 000 Appendix A, the parametrisation of identify's
+// HybridErrorModel and docs/hybrid-error-model.md), with
+//
+//   T_end = T_parent · base·E_0 · Π_j ( L_j·E_j · M_j(x_j) ) · L_end (·E_7 for the tool)
+//
+// L_j the nominal link to joint j's frame {R_j,i}, E_j = Trans(Δx, Δy, Δz)·
+// Rx(Δα)·Ry(Δβ)·Rz(Δγ) its error (the component along / about the joint's
+// own axis is the joint variable's: zero here), M_j = Rz(x) or Tz(x). The
+// errors are constant on their links, so each L_j·E_j is folded once
+// (hybrid_exact_chains) and a chain costs what the nominal one does.
+//
+// Two solvers over the same chains, allocation-free and bounded:
+//   hybrid_exact_ik  the commands that put the erroneous machine's tool on a
+//                    pose: the UP limb and the wrist form one 6-joint serial
+//                    chain (θ1, θ2, c − e, θ4, θ5, θ6), solved by Newton from
+//                    the nominal closed form; then each UPS limb (U, P, S: six
+//                    joints) is closed on its platform attachment by a 6 × 6
+//                    Newton, whose prismatic variable is the leg's length.
+//   hybrid_exact_fk  the pose for commands: Newton on the UP passive (θ1, θ2, c)
+//                    so that each closed UPS limb's length equals its command
+//                    (identify's HybridErrorModel::actual_fk, the "truth").
+// Both work in the base frame {R0} and convert at the workpiece frame {R}
+// (seed 000 Eq. (8)).
+#pragma once
+
+#include "kincal/core/hybrid.hpp"
+#include "kincal/core/hybrid_error_twist.hpp"
+#include "kincal/core/pose.hpp"
+#include "kincal/core/small_lu.hpp"
+#include "kincal/core/status.hpp"
+
+namespace kincal {
+
+// One chain: T_end = T_parent · base · Π_j (link[j] · M_j(x_j)) · end. Nominal
+// (hybrid_nominal_chains) or with Δχ folded into base, links and end.
+template <class Scalar> struct HybridChainLinks {
+  Pose<Scalar> base;
+  Pose<Scalar> link[6];
+  Pose<Scalar> end;
+};
+
+// UPS limb i as a chain from {R0} to its S centre frame {R_6,i}, and what
+// closes it: the attachment of that frame on the platform, and the
+// reference axes its closed-form start is taken about.
+template <class Scalar> struct HybridUpsLimb {
+  HybridChainLinks<Scalar> links;  // U (2 R), P, S (3 R): joint 2 prismatic
+  Pose<Scalar> attach;             // platform frame → the limb's end frame
+  Vec3<Scalar> origin;             // A1i: the U centre
+  Mat3<Scalar> axes;               // the reference end frame's axes [t, u × t, u]
+};
+
+// The five chains of the hybrid (identify's HybridErrorModel chains 0–4),
+// held for the host (identify, `kincal compensate` through the
+// compensator's stored form); a controller builds each chain when it needs
+// it instead (hybrid_exact_ik from the table's numbers: 3.5 KiB of chains
+// do not fit its static RAM).
+template <class Scalar> struct HybridChains {
+  HybridUpsLimb<Scalar> ups[3];
+  HybridChainLinks<Scalar> up;      // U (2 R), P: from {R0} to the platform frame (at A64)
+  HybridChainLinks<Scalar> wrist;   // 3 R from the platform frame to the tool frame at P
+  Vec6<Scalar> joint_offset = Vec6<Scalar>::Zero();  // physical − commanded (nominal + Δξ)
+  Scalar up_split = Scalar(345);    // e = |A44 A64| (seed 000 Table 1)
+};
+
+namespace hybrid_exact_detail {
+
+template <class S> Pose<S> make_pose(const NonDeducedT<Mat3<S>>& R, const NonDeducedT<Vec3<S>>& p) {
+  Pose<S> out;
+  out.R = R;
+  out.p = p;
+  return out;
+}
+
+template <class S> Mat3<S> columns(const Vec3<S>& x, const Vec3<S>& y, const Vec3<S>& z) {
+  Mat3<S> m;
+  m.col(0) = x;
+  m.col(1) = y;
+  m.col(2) = z;
+  return m;
+}
+
+template <class S> Pose<S> joint_motion(bool prismatic, S x) {
+  if (prismatic) return make_pose<S>(Mat3<S>::Identity(), Vec3<S>(S(0), S(0), x));
+  return make_pose<S>(rot_z(x), Vec3<S>::Zero());
+}
+
+// E = Trans(Δx, Δy, Δz)·Rx(Δα)·Ry(Δβ)·Rz(Δγ) (Appendix A; d = (Δx … Δγ)).
+template <class S> Pose<S> error_transform(const S* d) {
+  return make_pose<S>(Mat3<S>(rot_x(d[3]) * rot_y(d[4]) * rot_z(d[5])), Vec3<S>(d[0], d[1], d[2]));
+}
+
+// A joint frame's five kept errors as six (Δz omitted for a prismatic, Δγ for
+// a revolute joint: Appendix A's k = 1, k = 0).
+template <class S> void expand_joint_error(const S* e, bool prismatic, S* d) {
+  if (prismatic) {
+    d[0] = e[0], d[1] = e[1], d[2] = S(0), d[3] = e[2], d[4] = e[3], d[5] = e[4];
+  } else {
+    d[0] = e[0], d[1] = e[1], d[2] = e[2], d[3] = e[3], d[4] = e[4], d[5] = S(0);
+  }
+}
+
+// The links of a chain from the world poses of its joint frames at a
+// reference configuration x_ref and of its end frame there.
+template <class S>
+void set_links(HybridChainLinks<S>& c, int joints, const bool* prismatic, const Pose<S>& parent_ref,
+               const Pose<S>* frames, const S* x_ref, const Pose<S>& end_ref) {
+  Pose<S> prev = parent_ref * c.base;
+  for (int j = 0; j < joints; ++j) {
+    c.link[j] = prev.inverse() * frames[j];
+    prev = frames[j] * joint_motion(prismatic[j], x_ref[j]);
+  }
+  c.end = prev.inverse() * end_ref;
+}
+
+// Folds a chain's Δη (frame 0's six if `base_error`, then five per joint)
+// into its base and links.
+template <class S>
+void fold_errors(HybridChainLinks<S>& c, int joints, const bool* prismatic, bool base_error, const S* eta) {
+  int k = 0;
+  if (base_error) {
+    c.base = c.base * error_transform(eta);
+    k = 6;
+  }
+  for (int j = 0; j < joints; ++j, k += 5) {
+    S d[6];
+    expand_joint_error(eta + k, prismatic[j], d);
+    c.link[j] = c.link[j] * error_transform(d);
+  }
+}
+
+inline constexpr bool kUpsPrismatic[6] = {false, false, true, false, false, false};
+inline constexpr bool kUpPrismatic[3] = {false, false, true};
+inline constexpr bool kWristPrismatic[3] = {false, false, false};
+
+// T ← T·M(x) in place: a revolute joint turns two columns of R (T·Rz(x)), a
+// prismatic one moves the origin along the third (T·Tz(x)) — a quarter of a
+// full pose product, and the chains are mostly these.
+template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
+  if (prismatic) {
+    T.p += x * T.R.col(2);
+    return;
+  }
+  const S c = std::cos(x), s = std::sin(x);
+  const Vec3<S> x_axis = T.R.col(0);
+  T.R.col(0) = c * x_axis + s * T.R.col(1);
+  T.R.col(1) = c * T.R.col(1) - s * x_axis;
+}
+
+// A chain's end pose at joint values x, and each joint's axis frame (z along
+// the axis, through its origin) in `axis` (if given).
+template <class S>
+Pose<S> chain_end(const HybridChainLinks<S>& c, int joints, const bool* prismatic, const Pose<S>& parent, const S* x,
+                  Pose<S>* axis) {
+  Pose<S> T = parent * c.base;
+  for (int j = 0; j < joints; ++j) {
+    T = T * c.link[j];
+    if (axis != nullptr) axis[j] = T;
+    move_along_joint(T, prismatic[j], x[j]);
+  }
+  return T * c.end;
+}
+
+// The residual that moves a chain's end onto `target`: (Δp, ω) in world axes,
+// ω = vee(skew part of R_target·R_endᵀ) — sin θ·axis, which vanishes exactly
+// where the rotations agree (|θ| < π/2) and is what Newton needs; no libm.
+template <class S> Vec6<S> closure_residual(const Pose<S>& target, const Pose<S>& end) {
+  const Mat3<S> D = target.R * end.R.transpose();
+  Vec6<S> e;
+  e.template head<3>() = target.p - end.p;
+  e(3) = S(0.5) * (D(2, 1) - D(1, 2));
+  e(4) = S(0.5) * (D(0, 2) - D(2, 0));
+  e(5) = S(0.5) * (D(1, 0) - D(0, 1));
+  return e;
+}
+
+}  // namespace hybrid_exact_detail
+
+// The reference frames {R_1,i} … {R_6,i} of a U-P-S limb (every angle zero,
+// the leg straight from the U centre A1 to the S centre A6;
+// docs/hybrid-error-model.md): U axes t and u × t at A1, P along u, S axes t,
+// u × t, u at A6, t = u × z0 horizontal (x0 for a vertical leg).
+template <class S> void ups_reference_frames(const Vec3<S>& A1, const Vec3<S>& A6, Pose<S>* frames) {
+  using hybrid_exact_detail::columns;
+  using hybrid_exact_detail::make_pose;
+  const Vec3<S> u = (A6 - A1).normalized();
+  Vec3<S> t = u.cross(Vec3<S>::UnitZ());
+  if (t.norm() < S(1e-6)) t = Vec3<S>::UnitX();
+  t.normalize();
+  const Vec3<S> n = u.cross(t);
+  frames[0] = make_pose<S>(columns<S>(u, t.cross(u), t), A1);  // z = t, x = u
+  frames[1] = make_pose<S>(columns<S>(t, -u, n), A1);          // z = u × t, x = t
+  frames[2] = make_pose<S>(columns<S>(n, -t, u), A1);          // z = u (P), x = u × t
+  frames[3] = make_pose<S>(columns<S>(u, t.cross(u), t), A6);  // z = t, x = u
+  frames[4] = make_pose<S>(columns<S>(t, -u, n), A6);          // z = u × t, x = t
+  frames[5] = make_pose<S>(columns<S>(t, n, u), A6);           // z = u, x = t
+}
+
+// The nominal U-P-S limb of ups_reference_frames closed on `target` in
+// closed form: about the reference axes E = [t, u × t, u] the end frame is
+// E·Rx(x0)·Ry(x1)·Rx(x3)·Ry(x4)·Rz(x5) and the S centre A1 + x2·E·Rx(x0)·
+// Ry(x1)·e_z, so the leg's direction gives the U angles and its length, the
+// rest of the rotation the S angles, each on the branch through the
+// reference. False for a target on the U centre.
+template <class S> bool nominal_ups_joints(const Vec3<S>& A1, const Mat3<S>& E, const Pose<S>& target, S* x) {
+  Vec3<S> v = E.transpose() * (target.p - A1);
+  const S length = v.norm();
+  if (!(length > S(0))) return false;
+  v /= length;
+  const S one(1);
+  x[0] = std::atan2(-v(1), v(2));
+  x[1] = std::asin(v(0) < -one ? -one : v(0) > one ? one : v(0));
+  x[2] = length;
+  const Mat3<S> R = rot_y(-x[1]) * rot_x(-x[0]) * E.transpose() * target.R;  // Rx(x3)·Ry(x4)·Rz(x5)
+  x[3] = std::atan2(-R(1, 2), R(2, 2));
+  x[4] = std::asin(R(0, 2) < -one ? -one : R(0, 2) > one ? one : R(0, 2));
+  x[5] = std::atan2(-R(0, 1), R(0, 0));
+  return true;
+}
+
+// The chains are built as identify's HybridErrorModel places its frames:
+// fixed at the reference configuration (every joint angle zero, c = home
+// extension, the platform frame at A64), then the errors folded in.
+
+// UPS limb i, with its Δη block `eta` (36: frame 0's six, then five per
+// joint) folded in unless null.
+template <class S> void build_ups_limb(const HybridGeometry<S>& g, int i, const S* eta, HybridUpsLimb<S>& limb) {
+  using namespace hybrid_exact_detail;
+  const Pose<S> world;
+  const Pose<S> platform_ref = make_pose<S>(Mat3<S>::Identity(), Vec3<S>(g.home.extension * Vec3<S>::UnitZ()));
+  const Vec3<S> A1 = g.base_joints.col(i);
+  const Vec3<S> A6 = platform_ref.p + g.platform_joints.col(i);
+  Pose<S> frames[6];
+  ups_reference_frames(A1, A6, frames);
+  const S x_ref[6] = {S(0), S(0), (A6 - A1).norm(), S(0), S(0), S(0)};
+  limb.links.base = make_pose<S>(Mat3<S>::Identity(), A1);  // {R_0,i}: at A1i, axes of {R0}
+  set_links(limb.links, 6, kUpsPrismatic, world, frames, x_ref, frames[5]);
+  limb.attach = platform_ref.inverse() * frames[5];
+  limb.origin = A1;
+  limb.axes = frames[5].R;
+  if (eta != nullptr) fold_errors(limb.links, 6, kUpsPrismatic, true, eta);
+}
+
+// The UP limb (U at A0 = Rx(θ1)·Ry(θ2), P along w with variable c − e) and
+// the wrist (joints 4–6 of limb 4, from the platform frame), with their Δη
+// blocks (21, 15) and the tool frame's six errors folded in unless null.
+template <class S>
+void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta, const S* wrist_eta,
+                         const S* tool_eta, HybridChainLinks<S>& up, HybridChainLinks<S>& wrist) {
+  using namespace hybrid_exact_detail;
+  const Vec3<S> ex = Vec3<S>::UnitX(), ey = Vec3<S>::UnitY(), ez = Vec3<S>::UnitZ();
+  const S c_ref = g.home.extension, e = up_split;
+  const Pose<S> world;
+  const Pose<S> platform_ref = make_pose<S>(Mat3<S>::Identity(), Vec3<S>(c_ref * ez));
+  {
+    const Pose<S> frames[3] = {
+        make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>::Zero()),  // z = x0
+        make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>::Zero()),  // z = y0
+        make_pose<S>(Mat3<S>::Identity(), Vec3<S>::Zero()),      // z = z0 (= w), at A0
+    };
+    const S x_ref[3] = {S(0), S(0), c_ref - e};
+    up.base = Pose<S>();
+    set_links(up, 3, kUpPrismatic, world, frames, x_ref, platform_ref);
+    if (up_eta != nullptr) fold_errors(up, 3, kUpPrismatic, true, up_eta);
+  }
+  {
+    const S zq = c_ref + g.platform_to_wrist, zp0 = zq + g.wrist_link;
+    const Pose<S> frames[3] = {
+        make_pose<S>(columns<S>(ey, -ex, ez), Vec3<S>((c_ref - e) * ez)),  // z = w, at A44
+        make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>(zq * ez)),           // z = F4·x through Q
+        make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>(zp0 * ez)),          // z = F5·y through P0
+    };
+    const S x_ref[3] = {S(0), S(0), S(0)};
+    wrist.base = Pose<S>();
+    set_links(wrist, 3, kWristPrismatic, platform_ref, frames, x_ref,
+              make_pose<S>(g.tool_offset, Vec3<S>((zp0 + g.tool_length) * ez)));
+    if (wrist_eta != nullptr) fold_errors(wrist, 3, kWristPrismatic, false, wrist_eta);
+    if (tool_eta != nullptr) wrist.end = wrist.end * error_transform(tool_eta);
+  }
+}
+
+// Whether Δχ (and the extra encoder offsets, if given) are all finite.
+template <class S> bool finite_source_errors(const S* source_errors, const S* encoder_offsets) {
+  for (int k = 0; k < HybridErrorLayout::size(); ++k)
+    if (!is_finite(source_errors[k])) return false;
+  if (encoder_offsets != nullptr)
+    for (int k = 0; k < HybridErrorLayout::kEncoders; ++k)
+      if (!is_finite(encoder_offsets[k])) return false;
+  return true;
+}
+
+// physical − commanded: the nominal offsets, Δξ and the extra encoder offsets.
+template <class S> Vec6<S> exact_joint_offset(const HybridGeometry<S>& g, const S* source_errors, const S* encoder_offsets) {
+  Vec6<S> o = g.joint_offset;
+  for (int k = 0; k < HybridErrorLayout::kEncoders; ++k)
+    o(k) += (source_errors != nullptr ? source_errors[k] : S(0)) + (encoder_offsets != nullptr ? encoder_offsets[k] : S(0));
+  return o;
+}
+
+// The chains of the erroneous machine, built in place in `out` (all of them:
+// the host's stored form). `source_errors` is Δχ in HybridErrorLayout (null:
+// the nominal machine); `encoder_offsets`, if given, six more (a table's ξ̂,
+// kept apart from its Δχ̂). InvalidInput if a value is not finite; `out` is
+// written only on Ok.
+template <class S>
+Status hybrid_exact_chains(const HybridGeometry<S>& g, S up_split, const S* source_errors, HybridChains<S>& out,
+                           const S* encoder_offsets = nullptr) {
+  if (source_errors != nullptr && !finite_source_errors(source_errors, encoder_offsets)) return Status::InvalidInput;
+  const S* chi = source_errors;
+  for (int i = 0; i < 3; ++i) build_ups_limb(g, i, chi != nullptr ? chi + HybridErrorLayout::ups(i) : nullptr, out.ups[i]);
+  build_serial_chains(g, up_split, chi != nullptr ? chi + HybridErrorLayout::up() : nullptr,
+                      chi != nullptr ? chi + HybridErrorLayout::wrist() : nullptr,
+                      chi != nullptr ? chi + HybridErrorLayout::tool() : nullptr, out.up, out.wrist);
+  out.joint_offset = exact_joint_offset(g, chi, encoder_offsets);
+  out.up_split = up_split;
+  return Status::Ok;
+}
+
+template <class S> HybridChains<S> hybrid_nominal_chains(const HybridGeometry<S>& g, S up_split) {
+  HybridChains<S> c;
+  hybrid_exact_chains<S>(g, up_split, nullptr, c);
+  return c;
+}
+
+// Stopping rules of the exact solvers: a chain is closed when its end is
+// within `closure` of the target (mm; rotations × characteristic length), or
+// when Newton has reached rounding (no longer halving below `floor`).
+template <class Scalar> struct HybridExactTolerance;
+template <> struct HybridExactTolerance<double> {
+  static constexpr double closure = 1e-10;  // mm
+  static constexpr double floor = 1e-8;
+  static constexpr int max_iterations = 12;
+};
+template <> struct HybridExactTolerance<float> {
+  static constexpr float closure = 1e-4f;  // float rounding of a 1 m chain is ~6e-5 mm
+  static constexpr float floor = 2e-3f;
+  static constexpr int max_iterations = 12;
+};
+
+namespace hybrid_exact_detail {
+
+// Newton on the joint variables x of a 6-joint serial chain (`ends(x, axis)`
+// writes the six joint axis frames and returns the end pose) until its end
+// coincides with `target`. The Jacobian's columns are the joints' twists at
+// the end point; revolute columns and rotation rows are scaled by the
+// characteristic length L so the LU's pivot ratio judges a dimensionless
+// matrix (the singularity test of core). On Ok `lu` holds the last
+// factorisation (the unscaled relation J·δx = δ(end) through `scale`).
+template <class S, class Ends>
+Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu,
+                    int* iterations) {
+  S previous = S(0);
+  for (int it = 0;; ++it) {
+    Pose<S> axis[6];
+    const Pose<S> end = ends(x, axis);
+    Vec6<S> e = closure_residual(target, end);
+    e.template tail<3>() *= L;
+    const S err = e.cwiseAbs().maxCoeff();
+    if (!(err == err)) return Status::InvalidInput;
+    if (iterations != nullptr) *iterations = it;
+    // Closed: the factorisation of the previous iterate stays in `lu` (the
+    // FK's outer Newton needs a Jacobian here, not the last digit of one).
+    if (it > 0 && (err <= HybridExactTolerance<S>::closure ||
+                   (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous)))
+      return Status::Ok;
+    Mat6<S> J;
+    for (int j = 0; j < 6; ++j) {
+      const Vec3<S> a = axis[j].R.col(2);
+      if (prismatic[j]) {
+        J.template block<3, 1>(0, j) = a;
+        J.template block<3, 1>(3, j).setZero();
+      } else {  // (a × (P − p), a)·dθ, with dθ = dy / L and the rows ω × L
+        J.template block<3, 1>(0, j) = a.cross(Vec3<S>(end.p - axis[j].p)) / L;
+        J.template block<3, 1>(3, j) = a;
+      }
+    }
+    if (!factor_regular(lu, J)) return Status::Singular;
+    if (it == 0 && err <= HybridExactTolerance<S>::closure) return Status::Ok;  // the start was the solution
+    if (it == HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
+    const Vec6<S> step = lu.solve(e);
+    for (int j = 0; j < 6; ++j) x[j] += prismatic[j] ? step(j) : step(j) / L;
+    // Newton converges quadratically here, r_{k+1} ≈ K·r_k² with K ≈
+    // r_k / r_{k−1}² seen on the last step: when the residual this step
+    // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
+    // shrink it a hundredfold, so the regime is quadratic), the chain is
+    // closed without evaluating it again — one chain evaluation of three
+    // saved per closure (the twist fixed point of compensation.hpp judges
+    // its last iterate the same way). The tests check the result against
+    // the FK to 1e-9 mm.
+    if (it > 0 && err < S(0.01) * previous && err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure)
+      return Status::Ok;
+    previous = err;
+  }
+}
+
+// UPS limb `limb` closed on the platform pose `platform` (in {R0}): its six
+// joint variables x, Newton from the nominal closed form.
+template <class S>
+Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S* x, SmallLu<S, 6>& lu) {
+  const Pose<S> target = platform * limb.attach;
+  if (!nominal_ups_joints(limb.origin, limb.axes, target, x)) return Status::Unreachable;
+  const Pose<S> world;
+  auto ends = [&](const S* xs, Pose<S>* axis) { return chain_end(limb.links, 6, kUpsPrismatic, world, xs, axis); };
+  return close_serial(ends, kUpsPrismatic, target, L, x, lu, nullptr);
+}
+
+// The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
+// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from the
+// nominal machine's closed-form configuration there. Writes x and the
+// platform pose at the solution.
+template <class S>
+Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridChainLinks<S>& up,
+                          const HybridChainLinks<S>& wrist, S up_split, const Pose<S>& tool, S* x, Pose<S>& platform) {
+  HybridFrames<S> f;
+  Vec3<S> angles;
+  const Status s = hybrid_frames_at_pose(nominal, tool, f, angles);
+  if (s != Status::Ok) return s;
+  x[0] = std::atan2(f.Rp(2, 1), f.Rp(1, 1));
+  x[1] = std::atan2(f.Rp(0, 2), f.Rp(0, 0));
+  x[2] = f.extension - up_split;
+  for (int j = 0; j < 3; ++j) x[3 + j] = angles(j);
+  // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
+  const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
+  Pose<S> target;
+  target.R = Rt * tool.R;
+  target.p = nominal.workpiece_origin + Rt * tool.p;
+  const Pose<S> world;
+  auto serial = [&](const S* xs, Pose<S>* axis) {
+    platform = chain_end(up, 3, kUpPrismatic, world, xs, axis);
+    return chain_end(wrist, 3, kWristPrismatic, platform, xs + 3, axis == nullptr ? nullptr : axis + 3);
+  };
+  constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
+  SmallLu<S, 6> lu;
+  const Status closed = close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, lu, nullptr);
+  if (closed == Status::Ok) serial(x, nullptr);  // the platform at the solution
+  return closed;
+}
+
+// The commands from the physical joint values, checked against `nominal`'s
+// limits (as hybrid_ik).
+template <class S>
+Status exact_commands(const HybridGeometry<S>& nominal, const Vec6<S>& physical, const Vec6<S>& joint_offset,
+                      S extension, Vec6<S>& q) {
+  const Vec6<S> cmd = physical - joint_offset;
+  if (!all_finite(cmd)) return Status::InvalidInput;
+  if (!hybrid_within_limits(nominal, cmd) || extension < nominal.min_extension || extension > nominal.max_extension)
+    return Status::OutOfLimits;
+  q = cmd;
+  return Status::Ok;
+}
+
+}  // namespace hybrid_exact_detail
+
+// The commands that put the erroneous machine's tool on `tool` (in {R}):
+// the UP limb and the wrist closed on it, then each UPS limb on the platform
+// they place, its prismatic variable the leg's physical length. `nominal`
+// gives the Newton start (its closed-form configuration), the workpiece
+// frame, the characteristic length and the limits; `c` the erroneous chains
+// (hybrid_exact_chains). Writes `q` (commanded = physical − c.joint_offset)
+// and `passive` only on Ok. InvalidInput (non-finite), Unreachable /
+// Singular (as hybrid_ik, or a chain that loses rank), NotConverged,
+// OutOfLimits (a command or the UP extension outside `nominal`'s limits).
+template <class S>
+Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& c, const Pose<S>& tool, Vec6<S>& q,
+                       NonDeducedT<HybridPassive<S>>* passive = nullptr) {
+  using namespace hybrid_exact_detail;
+  if (!tool.finite()) return Status::InvalidInput;
+  S x[6];
+  Pose<S> platform;
+  Status s = close_up_and_wrist(nominal, c.up, c.wrist, c.up_split, tool, x, platform);
+  if (s != Status::Ok) return s;
+  Vec6<S> physical;
+  for (int i = 0; i < 3; ++i) {
+    S xu[6];
+    SmallLu<S, 6> lu;
+    s = close_ups(c.ups[i], platform, nominal.characteristic_length, xu, lu);
+    if (s != Status::Ok) return s;
+    physical(i) = xu[2];
+  }
+  for (int j = 0; j < 3; ++j) physical(3 + j) = x[3 + j];
+  s = exact_commands(nominal, physical, c.joint_offset, x[2] + c.up_split, q);
+  if (s == Status::Ok && passive != nullptr) {
+    passive->theta1 = x[0];
+    passive->theta2 = x[1];
+    passive->extension = x[2] + c.up_split;
+  }
+  return s;
+}
+
+#if defined(__GNUC__)
+#define KINCAL_EXACT_NOINLINE __attribute__((noinline))
+#else
+#define KINCAL_EXACT_NOINLINE
+#endif
+
+namespace hybrid_exact_detail {
+
+// The controller's form builds each chain from the table's numbers where it
+// is needed, on the stack, one stage at a time (each stage its own frame,
+// so the worst-case stack is the deeper stage, not their sum).
+template <class S>
+KINCAL_EXACT_NOINLINE Status stage_up_and_wrist(const HybridGeometry<S>& nominal, S up_split, const S* chi,
+                                                const Pose<S>& tool, S* x, Pose<S>& platform) {
+  HybridChainLinks<S> up, wrist;
+  build_serial_chains(nominal, up_split, chi + HybridErrorLayout::up(), chi + HybridErrorLayout::wrist(),
+                      chi + HybridErrorLayout::tool(), up, wrist);
+  return close_up_and_wrist(nominal, up, wrist, up_split, tool, x, platform);
+}
+
+template <class S>
+KINCAL_EXACT_NOINLINE Status stage_ups(const HybridGeometry<S>& nominal, const S* chi, int i, const Pose<S>& platform,
+                                       S& length) {
+  HybridUpsLimb<S> limb;
+  build_ups_limb(nominal, i, chi + HybridErrorLayout::ups(i), limb);
+  S xu[6];
+  SmallLu<S, 6> lu;
+  const Status s = close_ups(limb, platform, nominal.characteristic_length, xu, lu);
+  if (s == Status::Ok) length = xu[2];
+  return s;
+}
+
+}  // namespace hybrid_exact_detail
+
+// The same IK from the numbers themselves (a table's Δχ̂, in place, and its
+// ξ̂): no stored chains. Same statuses; `source_errors` must be finite (a
+// table's values are checked when it is loaded).
+// Not inlined (not even into the compensator's flattened solve()): one
+// copy of the Newton code, and its stages' frames apart.
+template <class S>
+KINCAL_EXACT_NOINLINE Status hybrid_exact_ik(const HybridGeometry<S>& nominal, S up_split, const S* source_errors,
+                                             const S* encoder_offsets,
+                       const Pose<S>& tool, Vec6<S>& q, NonDeducedT<HybridPassive<S>>* passive = nullptr) {
+  using namespace hybrid_exact_detail;
+  if (!tool.finite()) return Status::InvalidInput;
+  S x[6];
+  Pose<S> platform;
+  Status s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, platform);
+  if (s != Status::Ok) return s;
+  Vec6<S> physical;
+  for (int i = 0; i < 3; ++i) {
+    s = stage_ups(nominal, source_errors, i, platform, physical(i));
+    if (s != Status::Ok) return s;
+  }
+  for (int j = 0; j < 3; ++j) physical(3 + j) = x[3 + j];
+  s = exact_commands(nominal, physical, exact_joint_offset(nominal, source_errors, encoder_offsets), x[2] + up_split, q);
+  if (s == Status::Ok && passive != nullptr) {
+    passive->theta1 = x[0];
+    passive->theta2 = x[1];
+    passive->extension = x[2] + up_split;
+  }
+  return s;
+}
+
+// The erroneous machine's tool pose in {R} for commands q, from the UP
+// passive `guess`: Newton on s = (θ1, θ2, c) so that each UPS limb, closed on
+// the platform the UP limb puts there, has the commanded physical length;
+// ∂x_2,i/∂s_k = (J_i⁻¹·twist_k)_2, twist_k the UP joint k's twist at the
+// attachment. Writes `tool` (and `passive`) only on Ok.
+template <class S>
+FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains<S>& c, const Vec6<S>& q,
+                            const HybridPassive<S>& guess, Pose<S>& tool,
+                            NonDeducedT<HybridPassive<S>>* passive = nullptr) {
+  using namespace hybrid_exact_detail;
+  FkReport<S> report;
+  if (!all_finite(q) || !is_finite(guess.theta1) || !is_finite(guess.theta2) || !is_finite(guess.extension)) {
+    report.status = Status::InvalidInput;
+    return report;
+  }
+  const Vec6<S> physical = q + c.joint_offset;
+  const S L = nominal.characteristic_length;
+  const S tolerance = Tolerance<S>::fk_residual * physical.template head<3>().cwiseAbs().maxCoeff() +
+                      HybridExactTolerance<S>::closure;
+  S xs[3] = {guess.theta1, guess.theta2, guess.extension - c.up_split};
+  const Pose<S> world;
+  for (int it = 0;; ++it) {
+    Pose<S> axis[3];
+    const Pose<S> platform = chain_end(c.up, 3, kUpPrismatic, world, xs, axis);
+    Vec3<S> r;
+    Mat3<S> M;
+    for (int i = 0; i < 3; ++i) {
+      S xu[6];
+      SmallLu<S, 6> lu;
+      const Status s = close_ups(c.ups[i], platform, L, xu, lu);
+      if (s != Status::Ok) {
+        report.status = s;
+        return report;
+      }
+      const Vec3<S> P = (platform * c.ups[i].attach).p;
+      r(i) = xu[2] - physical(i);
+      for (int k = 0; k < 3; ++k) {  // the UP joint k's twist at the attachment, in close_serial's scaling
+        const Vec3<S> a = axis[k].R.col(2);
+        Vec6<S> t = Vec6<S>::Zero();
+        if (kUpPrismatic[k]) {
+          t.template head<3>() = a;
+        } else {
+          const Vec3<S> arm = P - axis[k].p;
+          t.template head<3>() = a.cross(arm);
+          t.template tail<3>() = L * a;
+        }
+        M(i, k) = lu.solve(t)(2);  // joint 2 (P) of the limb: unscaled
+      }
+    }
+    report.iterations = it;
+    report.residual = r.cwiseAbs().maxCoeff();
+    if (report.residual <= tolerance) {
+      const Pose<S> T = chain_end<S>(c.wrist, 3, kWristPrismatic, platform, physical.data() + 3, nullptr);
+      Pose<S> out;
+      out.R = nominal.workpiece_rotation * T.R;
+      out.p = nominal.workpiece_rotation * (T.p - nominal.workpiece_origin);
+      if (!out.finite()) break;
+      tool = out;
+      if (passive != nullptr) {
+        passive->theta1 = xs[0];
+        passive->theta2 = xs[1];
+        passive->extension = xs[2] + c.up_split;
+      }
+      report.status = Status::Ok;
+      return report;
+    }
+    if (it == Tolerance<S>::fk_max_iterations || !(report.residual == report.residual)) break;
+    SmallLu<S, 3> lu3;
+    if (!lu3.factor(M)) {
+      report.status = Status::Singular;
+      return report;
+    }
+    const Vec3<S> step = lu3.solve(-r);
+    for (int k = 0; k < 3; ++k) xs[k] += step(k);
+  }
+  report.status = Status::NotConverged;
+  return report;
+}
+
+}  // namespace kincal

@@ -1,0 +1,196 @@
+// core's exact erroneous hybrid (core/hybrid_exact.hpp: chains with Δχ folded
+// into their links, Newton IK and FK) against identify's nonlinear machine
+// (HybridErrorModel::actual_fk, whose chains are rebuilt from the source
+// errors at every call and closed by its own Newton code), and against
+// itself: IK then FK returns the pose. Errors at two sizes (10 µm / 20 µrad
+// and 1 mm / 2 mrad, issue #31's nonlinear case), random poses over the task
+// workspace with tilts, double and float.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "kincal/core/hybrid_exact.hpp"
+#include "kincal/core/reference_machines.hpp"
+#include "kincal/identify/hybrid_error_model.hpp"
+
+namespace {
+
+using kincal::HybridChains;
+using kincal::HybridErrorLayout;
+using kincal::HybridGeometry;
+using kincal::HybridPassive;
+using kincal::Pose;
+using kincal::Status;
+using kincal::Vec6;
+
+constexpr double kUpSplit = 345.0;
+
+const HybridGeometry<double>& geometry() {
+  static const HybridGeometry<double> g = kincal::make_hybrid_seed000<double>();
+  return g;
+}
+
+Eigen::VectorXd random_errors(std::mt19937& rng, double length_mm, double angle_rad) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd e(HybridErrorLayout::size());
+  for (int k = 0; k < e.size(); ++k) e(k) = u(rng) * (HybridErrorLayout::angular(k) ? angle_rad : length_mm);
+  return e;
+}
+
+// A pose of the task workspace (500 × 500 × 120 mm about {R}'s origin), tilted
+// up to 0.15 rad about each axis.
+Pose<double> random_pose(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  return Pose<double>::from_xyz_rpy(250 * u(rng), 250 * u(rng), 60 * u(rng), 0.15 * u(rng), 0.15 * u(rng),
+                                    0.15 * u(rng));
+}
+
+double position_gap(const Pose<double>& a, const Pose<double>& b) { return (a.p - b.p).norm(); }
+double rotation_gap(const Pose<double>& a, const Pose<double>& b) { return (a.R - b.R).cwiseAbs().maxCoeff(); }
+
+TEST(HybridExact, ZeroErrorsAreTheNominalMachine) {
+  const HybridGeometry<double>& g = geometry();
+  HybridChains<double> c;
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(HybridErrorLayout::size());
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, zero.data(), c), Status::Ok);
+  std::mt19937 rng(11);
+  for (int n = 0; n < 100; ++n) {
+    const Pose<double> pose = random_pose(rng);
+    Vec6<double> q_nominal, q_exact;
+    ASSERT_EQ(kincal::hybrid_ik(g, pose, q_nominal), Status::Ok);
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, q_exact), Status::Ok);
+    EXPECT_LT((q_exact - q_nominal).cwiseAbs().maxCoeff(), 1e-9) << "pose " << n;
+    Pose<double> fk_nominal, fk_exact;
+    ASSERT_EQ(kincal::hybrid_fk(g, q_nominal, g.home, fk_nominal).status, Status::Ok);
+    ASSERT_EQ(kincal::hybrid_exact_fk(g, c, q_nominal, g.home, fk_exact).status, Status::Ok);
+    EXPECT_LT(position_gap(fk_exact, fk_nominal), 1e-9);
+    EXPECT_LT(rotation_gap(fk_exact, fk_nominal), 1e-12);
+  }
+}
+
+// core's FK of the folded chains equals identify's actual_fk, which applies
+// each E_j while walking the chain: the same machine, two code paths.
+TEST(HybridExact, ForwardKinematicsEqualsIdentifysNonlinearMachine) {
+  const HybridGeometry<double>& g = geometry();
+  const kincal::identify::HybridErrorModel model(g);
+  std::mt19937 rng(5);
+  for (const auto& [length, angle] : {std::pair{0.01, 2e-5}, std::pair{1.0, 2e-3}}) {
+    for (int m = 0; m < 4; ++m) {
+      const Eigen::VectorXd errors = random_errors(rng, length, angle);
+      HybridChains<double> c;
+      ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+      double worst = 0;
+      for (int n = 0; n < 20; ++n) {
+        Vec6<double> q;
+        ASSERT_EQ(kincal::hybrid_ik(g, random_pose(rng), q), Status::Ok);
+        Pose<double> truth, core;
+        ASSERT_EQ(model.actual_fk(errors, q, g.home, truth).status, Status::Ok);
+        const auto report = kincal::hybrid_exact_fk(g, c, q, g.home, core);
+        ASSERT_EQ(report.status, Status::Ok);
+        worst = std::max(worst, position_gap(core, truth));
+        EXPECT_LT(rotation_gap(core, truth), 1e-12);
+      }
+      EXPECT_LT(worst, 1e-9) << "errors " << length << " mm / " << angle << " rad, machine " << m;
+      // The errors are really there: the machine is far from the nominal one.
+      Vec6<double> q;
+      ASSERT_EQ(kincal::hybrid_ik(g, Pose<double>(), q), Status::Ok);
+      Pose<double> nominal, actual;
+      ASSERT_EQ(kincal::hybrid_fk(g, q, g.home, nominal).status, Status::Ok);
+      ASSERT_EQ(kincal::hybrid_exact_fk(g, c, q, g.home, actual).status, Status::Ok);
+      EXPECT_GT(position_gap(actual, nominal), 100 * length * 0.01);
+    }
+  }
+}
+
+// The exact IK inverts the exact machine: the commands it gives put the
+// erroneous tool on the pose asked for, to rounding — at 1 mm / 2 mrad,
+// where the first-order model leaves micrometres (issue #31).
+TEST(HybridExact, InverseKinematicsInvertsTheErroneousMachine) {
+  const HybridGeometry<double>& g = geometry();
+  const kincal::identify::HybridErrorModel model(g);
+  std::mt19937 rng(23);
+  for (const auto& [length, angle] : {std::pair{0.1, 3e-4}, std::pair{1.0, 2e-3}}) {
+    const Eigen::VectorXd errors = random_errors(rng, length, angle);
+    HybridChains<double> c;
+    ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+    double worst_p = 0, worst_r = 0;
+    for (int n = 0; n < 100; ++n) {
+      const Pose<double> pose = random_pose(rng);
+      Vec6<double> q;
+      HybridPassive<double> passive;
+      ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, q, &passive), Status::Ok) << "pose " << n;
+      Pose<double> reached;
+      ASSERT_EQ(model.actual_fk(errors, q, g.home, reached).status, Status::Ok);
+      worst_p = std::max(worst_p, position_gap(reached, pose));
+      worst_r = std::max(worst_r, rotation_gap(reached, pose));
+    }
+    EXPECT_LT(worst_p, 1e-9) << length << " mm";
+    EXPECT_LT(worst_r, 1e-12) << length << " mm";
+  }
+}
+
+// The controller's form, which builds each chain from the table's numbers
+// where it needs it (no stored chains), gives the stored form's commands.
+TEST(HybridExact, TheTableFormEqualsTheStoredChains) {
+  const HybridGeometry<double>& g = geometry();
+  std::mt19937 rng(41);
+  Eigen::VectorXd errors = random_errors(rng, 0.5, 1e-3);
+  const Eigen::VectorXd encoder = random_errors(rng, 0.2, 5e-4).head<6>();
+  HybridChains<double> c;
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c, encoder.data()), Status::Ok);
+  for (int n = 0; n < 50; ++n) {
+    const Pose<double> pose = random_pose(rng);
+    Vec6<double> stored, from_table;
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, stored), Status::Ok);
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, kUpSplit, errors.data(), encoder.data(), pose, from_table), Status::Ok);
+    EXPECT_LT((stored - from_table).cwiseAbs().maxCoeff(), 1e-12) << "pose " << n;
+  }
+}
+
+TEST(HybridExact, FloatFollowsDouble) {
+  const HybridGeometry<double>& g = geometry();
+  const HybridGeometry<float> gf = g.cast<float>();
+  std::mt19937 rng(3);
+  const Eigen::VectorXd errors = random_errors(rng, 1.0, 2e-3);
+  const Eigen::VectorXf errors_f = errors.cast<float>();
+  HybridChains<double> c;
+  HybridChains<float> cf;
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+  ASSERT_EQ(kincal::hybrid_exact_chains(gf, float(kUpSplit), errors_f.data(), cf), Status::Ok);
+  for (int n = 0; n < 50; ++n) {
+    const Pose<double> pose = random_pose(rng);
+    Vec6<double> q;
+    Vec6<float> qf;
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, q), Status::Ok);
+    ASSERT_EQ(kincal::hybrid_exact_ik(gf, cf, pose.cast<float>(), qf), Status::Ok) << "pose " << n;
+    // float rounding of 1 m chains: ~1e-4 mm per chain, the wrist in rad.
+    EXPECT_LT((qf.cast<double>() - q).head<3>().cwiseAbs().maxCoeff(), 2e-3) << "pose " << n;
+    EXPECT_LT((qf.cast<double>() - q).tail<3>().cwiseAbs().maxCoeff(), 2e-5) << "pose " << n;
+  }
+}
+
+TEST(HybridExact, BadInputIsAStatus) {
+  const HybridGeometry<double>& g = geometry();
+  Eigen::VectorXd errors = Eigen::VectorXd::Zero(HybridErrorLayout::size());
+  HybridChains<double> c;
+  errors(40) = std::nan("");
+  EXPECT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::InvalidInput);
+  errors(40) = 0.0;
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+  Pose<double> pose;
+  pose.p.x() = std::nan("");
+  Vec6<double> q = Vec6<double>::Constant(7.0);
+  EXPECT_EQ(kincal::hybrid_exact_ik(g, c, pose, q), Status::InvalidInput);
+  EXPECT_EQ(q, Vec6<double>::Constant(7.0));  // untouched
+  // Out of reach: the tool point on the UP limb's U centre A0 ({R0}'s origin).
+  Pose<double> at_base;
+  at_base.p = -(g.workpiece_rotation * g.workpiece_origin);
+  EXPECT_EQ(kincal::hybrid_exact_ik(g, c, at_base, q), Status::Unreachable);
+  EXPECT_EQ(q, Vec6<double>::Constant(7.0));
+  Pose<double> out;
+  Vec6<double> bad = Vec6<double>::Zero();
+  bad(2) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(kincal::hybrid_exact_fk(g, c, bad, g.home, out).status, Status::InvalidInput);
+}
+
+}  // namespace
