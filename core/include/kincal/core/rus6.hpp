@@ -177,15 +177,20 @@ template <class Scalar, class Out> void rus6_wrenches_into(Out&& K, const Rus6Le
   }
 }
 
-// Inverse Jacobian J = ∂q/∂twist = Λ⁻¹·K (header comment). No checks.
-template <class Scalar> Mat6<Scalar> rus6_jacobian(const Rus6Legs<Scalar>& legs) {
-  Mat6<Scalar> J;
+// Inverse Jacobian J = ∂q/∂twist = Λ⁻¹·K (header comment), into any 6×6
+// destination. No checks.
+template <class Scalar, class Out> void rus6_jacobian_into(Out&& J, const Rus6Legs<Scalar>& legs) {
   for (int i = 0; i < 6; ++i) {
     const Vec3<Scalar> u = legs.rod_units.col(i);
     const Scalar inv_lever = Scalar(1) / legs.levers(i);
     J.template block<1, 3>(i, 0) = inv_lever * u.transpose();
     J.template block<1, 3>(i, 3) = inv_lever * Vec3<Scalar>(legs.arms.col(i)).cross(u).transpose();
   }
+}
+
+template <class Scalar> Mat6<Scalar> rus6_jacobian(const Rus6Legs<Scalar>& legs) {
+  Mat6<Scalar> J;
+  rus6_jacobian_into(J, legs);
   return J;
 }
 
@@ -198,21 +203,27 @@ template <class Scalar> bool rus6_levers_regular(const Rus6Geometry<Scalar>& g, 
   return true;
 }
 
-// Forward Jacobian ∂twist/∂q = K⁻¹·Λ (header comment), solved with the small
-// LU on K with its angular columns scaled by 1/L (dimensionless, as the
-// 6-UPS's): K = K_s·S⁻¹, S = diag(1, 1, 1, 1/L, 1/L, 1/L), so K⁻¹ = S·K_s⁻¹.
-// Singular (and `forward` untouched) at a parallel singularity (K) or a
-// serial one (a lever λ_i ≈ 0, where J⁻¹ loses rank).
+// The one singularity test of the family: false at a serial singularity (a
+// lever λ_i ≈ 0, where J⁻¹ loses rank) or a parallel one (K singular). K is
+// factorised with its angular columns scaled by 1/L (dimensionless, as the
+// 6-UPS's): K = K_s·S⁻¹, S = diag(1, 1, 1, 1/L, 1/L, 1/L); `lu` holds K_s.
+template <class Scalar>
+bool rus6_factor_regular(const Rus6Geometry<Scalar>& g, const Rus6Legs<Scalar>& legs, SmallLu<Scalar, 6>& lu) {
+  if (!rus6_levers_regular(g, legs)) return false;
+  rus6_wrenches_into(lu.storage(), legs);
+  lu.storage().template rightCols<3>() *= Scalar(1) / g.characteristic_length;
+  return lu.factor() && lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio;
+}
+
+// Forward Jacobian ∂twist/∂q = K⁻¹·Λ = S·K_s⁻¹·Λ (header comment): column j
+// is λ_j K_s⁻¹ e_j with its angular part scaled by 1/L. Singular (and
+// `forward` untouched) where rus6_factor_regular fails.
 template <class Scalar>
 Status rus6_forward_jacobian(const Rus6Geometry<Scalar>& g, const Rus6Legs<Scalar>& legs, Mat6<Scalar>& forward) {
-  if (!rus6_levers_regular(g, legs)) return Status::Singular;
   SmallLu<Scalar, 6> lu;
-  rus6_wrenches_into(lu.storage(), legs);
-  const Scalar inv_length = Scalar(1) / g.characteristic_length;
-  lu.storage().template rightCols<3>() *= inv_length;
-  if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return Status::Singular;
+  if (!rus6_factor_regular(g, legs, lu)) return Status::Singular;
   for (int j = 0; j < 6; ++j) forward.col(j) = legs.levers(j) * lu.solve(Vec6<Scalar>::Unit(j));
-  forward.template bottomRows<3>() *= inv_length;
+  forward.template bottomRows<3>() *= Scalar(1) / g.characteristic_length;
   return Status::Ok;
 }
 
@@ -274,11 +285,9 @@ Status rus6_ik(const Rus6Geometry<Scalar>& g, const Pose<Scalar>& pose, Vec6<Sca
     rus6_legs_at(g, pose, Vec6<Scalar>(cmd + g.joint_offset), at);
     if (!all_finite(at.rod_units) || !all_finite(at.levers)) return Status::InvalidInput;
     if (jacobian != nullptr) {
-      // The forward Jacobian's test covers both singularities; its value is
-      // not needed here.
-      Mat6<Scalar> forward;
-      if (rus6_forward_jacobian(g, at, forward) != Status::Ok) return Status::Singular;
-      *jacobian = rus6_jacobian(at);
+      SmallLu<Scalar, 6> lu;
+      if (!rus6_factor_regular(g, at, lu)) return Status::Singular;
+      rus6_jacobian_into(*jacobian, at);
     }
     if (legs != nullptr) *legs = at;
   }
