@@ -567,8 +567,8 @@ TEST(CoreRus6, ParallelSingularityIsReported) {
 }
 
 TEST(CoreRus6, SerialSingularityAndSphereOnShaftLine) {
-  // At the top of the reach (about 117 mm above home) each rod becomes
-  // tangent to nothing: |C| = ρ, the two branches meet and every lever
+  // At the top of the reach (about 117 mm above home) each rod is normal to
+  // its crank tip's path: |C| = ρ, the two branches meet and every lever
   // λ_i → 0. Bisect for that height with the limits opened.
   Rus6Geometry<double> g = make_rus6_ref<double>();
   g.min_joint.setConstant(-3.1);

@@ -23,8 +23,8 @@
 // ρ cos(θ − φ) = C, hence the two branches
 //   θ = φ + σ·acos(C/ρ),   σ = ±1,
 // real only for |C| ≤ ρ (otherwise the rod cannot reach the crank circle:
-// Unreachable). At |C| = ρ the branches meet: the rod lies along the crank
-// circle's tangent plane boundary, a serial singularity (dθ/dpose infinite).
+// Unreachable). At |C| = ρ the branches meet: the rod is normal to the path
+// of its crank tip, a serial singularity (dθ/dpose infinite).
 //
 // Branch = assembly mode. For θ = φ + σα with α ∈ (0, π), the crank direction
 // e = cos θ z + sin θ y is turned by σα from d's projection on the crank plane,
@@ -255,28 +255,42 @@ Status rus6_ik(const Rus6Geometry<Scalar>& g, const Pose<Scalar>& pose, Vec6<Sca
     const Scalar c = g.crank_length(i), l = g.rod_length(i);
     const Scalar A = d.dot(z), B = d.dot(y);
     const Scalar C = (d.squaredNorm() + c * c - l * l) / (Scalar(2) * c);
-    const Scalar rho = std::sqrt(A * A + B * B);
-    if (!is_finite(C) || !is_finite(rho)) return Status::InvalidInput;
-    if (!(std::abs(C) <= rho)) return Status::Unreachable;
-    if (!(rho > Scalar(0))) return Status::Singular;
-    const Scalar phi = std::atan2(B, A);
-    // |C/ρ| ≤ 1 here, but rounding in the division may step past 1.
-    const Scalar alpha = std::acos(std::min(Scalar(1), std::max(Scalar(-1), C / rho)));
+    const Scalar rho2 = A * A + B * B;
+    if (!is_finite(C) || !is_finite(rho2)) return Status::InvalidInput;
+    if (!(C * C <= rho2)) return Status::Unreachable;
+    if (!(rho2 > Scalar(0))) return Status::Singular;
+    // θ = φ + σα with cos α = C/ρ, sin α = S/ρ, S = √(ρ² − C²) ≥ 0:
+    //   cos θ = cos φ cos α − σ sin φ sin α = (A·C − σ B·S)/ρ²
+    //   sin θ = sin φ cos α + σ cos φ sin α = (B·C + σ A·S)/ρ²
+    // so one atan2 per branch (ρ² > 0 drops out), no acos, and a second
+    // atan2 only when the first branch tried is not the answer.
+    const Scalar S = std::sqrt(std::max(Scalar(0), rho2 - C * C));
     const Scalar lo = g.min_joint(i), hi = g.max_joint(i), mid = Scalar(0.5) * (lo + hi);
-    const Scalar plus = rus6_detail::wrap_about(phi + alpha - g.joint_offset(i), mid);
-    const Scalar minus = rus6_detail::wrap_about(phi - alpha - g.joint_offset(i), mid);
-    const bool plus_in = plus >= lo && plus <= hi, minus_in = minus >= lo && minus <= hi;
-    if (plus_in && minus_in) {
-      const Scalar branch = g.home_branch(i);
-      if (branch > Scalar(0)) cmd(i) = plus;
-      else if (branch < Scalar(0)) cmd(i) = minus;
-      else cmd(i) = std::abs(plus - mid) <= std::abs(minus - mid) ? plus : minus;
-    } else if (plus_in) {
-      cmd(i) = plus;
-    } else if (minus_in) {
-      cmd(i) = minus;
+    const Scalar offset = g.joint_offset(i);
+    auto branch_command = [&](Scalar sigma) {
+      return rus6_detail::wrap_about(std::atan2(B * C + sigma * A * S, A * C - sigma * B * S) - offset, mid);
+    };
+    auto inside = [&](Scalar x) { return x >= lo && x <= hi; };
+    // The rule at the top: a branch inside the limits, the home branch when
+    // both are (so with a known home branch, try it first: if it is inside it
+    // is the answer whatever the other does), else the one nearer mid-range.
+    const Scalar home = g.home_branch(i);
+    if (home != Scalar(0)) {
+      const Scalar first = branch_command(home);
+      if (inside(first)) {
+        cmd(i) = first;
+        continue;
+      }
+      const Scalar second = branch_command(-home);
+      if (!inside(second)) return Status::OutOfLimits;
+      cmd(i) = second;
     } else {
-      return Status::OutOfLimits;
+      const Scalar plus = branch_command(Scalar(1)), minus = branch_command(Scalar(-1));
+      const bool plus_in = inside(plus), minus_in = inside(minus);
+      if (plus_in && minus_in) cmd(i) = std::abs(plus - mid) <= std::abs(minus - mid) ? plus : minus;
+      else if (plus_in) cmd(i) = plus;
+      else if (minus_in) cmd(i) = minus;
+      else return Status::OutOfLimits;
     }
   }
   if (!all_finite(cmd)) return Status::InvalidInput;
