@@ -3,6 +3,7 @@
 #pragma once
 
 #include "kincal/core/hybrid.hpp"
+#include "kincal/core/rus6.hpp"
 #include "kincal/core/stewart.hpp"
 
 namespace kincal {
@@ -74,6 +75,69 @@ template <class Scalar> HybridGeometry<Scalar> make_hybrid_seed000() {
   g.max_joint << Scalar(D::max_ups), Scalar(D::max_ups), Scalar(D::max_ups), Scalar(2.9), Scalar(1.4), Scalar(1.4);
   g.min_extension = Scalar(400);
   g.max_extension = Scalar(1400);
+  return g;
+}
+
+// Dimensions of `rus6-ref` (docs/reference-machines.md, "rus6-ref"): a
+// 6-RUS of our own design, sized like a desktop motion platform.
+struct Rus6RefDimensions {
+  static constexpr double base_radius = 200.0;      // |s_i| from the base centre, shafts in z = 0
+  static constexpr double motor_spread_deg = 25.0;  // motors of a pair at 120°·k ± this
+  static constexpr double crank_length = 100.0;
+  static constexpr double rod_length = 300.0;
+  static constexpr double platform_radius = 130.0;
+  static constexpr double platform_spread_deg = 25.0;  // spheres at 120°·k ± this, platform z = 0
+  // Joint range about home (θ = 0, cranks horizontal). Asymmetric because
+  // lowering the platform swings the cranks further than raising it: over
+  // the ±40 mm / ±10° box about home θ spans −73.9°…+61.3°; the other IK
+  // branch stays beyond ±105° there.
+  static constexpr double min_joint_deg = -80.0, max_joint_deg = 70.0;
+};
+
+// `rus6-ref`. Motor pairs centred at 0°, 120°, 240° about z; each shaft is
+// horizontal and radial (a_i ∥ ±r̂), its crank at θ = 0 horizontal and
+// tangential, pointing away from the pair's other motor; a_i × z_i = +z, so
+// θ > 0 lifts every crank. Leg i's sphere sits at the same azimuth as its
+// motor on the smaller platform circle, so each rod leans inward and
+// sideways (the sideways lean is what resists rotation about z). Home is the
+// pose at which every crank is horizontal (θ = 0): by the three-fold and
+// mirror symmetry all six legs close there at one height, 274.04 mm.
+template <class Scalar> Rus6Geometry<Scalar> make_rus6_ref() {
+  using D = Rus6RefDimensions;
+  const double deg = 3.14159265358979323846 / 180.0;
+  Rus6Geometry<Scalar> g;
+  for (int pair = 0; pair < 3; ++pair) {
+    for (int side = 0; side < 2; ++side) {
+      const int i = 2 * pair + side;
+      const double sign = side == 0 ? -1.0 : 1.0;
+      const double motor_azimuth = (120.0 * pair + sign * D::motor_spread_deg) * deg;
+      const double sphere_azimuth = (120.0 * pair + sign * D::platform_spread_deg) * deg;
+      const double cm = std::cos(motor_azimuth), sm = std::sin(motor_azimuth);
+      g.shaft_points.col(i) = Vec3<Scalar>(Scalar(D::base_radius * cm), Scalar(D::base_radius * sm), Scalar(0));
+      // Tangent away from the partner (sign · t̂), axis sign · r̂: r̂ × t̂ = +z.
+      g.crank_zero.col(i) = Vec3<Scalar>(Scalar(-sign * sm), Scalar(sign * cm), Scalar(0));
+      g.shaft_axes.col(i) = Vec3<Scalar>(Scalar(sign * cm), Scalar(sign * sm), Scalar(0));
+      g.platform_joints.col(i) = Vec3<Scalar>(Scalar(D::platform_radius * std::cos(sphere_azimuth)),
+                                              Scalar(D::platform_radius * std::sin(sphere_azimuth)), Scalar(0));
+    }
+  }
+  g.crank_length.setConstant(Scalar(D::crank_length));
+  g.rod_length.setConstant(Scalar(D::rod_length));
+  g.min_joint.setConstant(Scalar(D::min_joint_deg * deg));
+  g.max_joint.setConstant(Scalar(D::max_joint_deg * deg));
+  // Home height: the rod's horizontal run h from the horizontal crank's tip
+  // to its sphere, then z = √(ℓ² − h²) (in double, then cast).
+  const double motor_azimuth = -D::motor_spread_deg * deg, sphere_azimuth = -D::platform_spread_deg * deg;
+  const double tip_x = D::base_radius * std::cos(motor_azimuth) + D::crank_length * std::sin(motor_azimuth);
+  const double tip_y = D::base_radius * std::sin(motor_azimuth) - D::crank_length * std::cos(motor_azimuth);
+  const double run_x = D::platform_radius * std::cos(sphere_azimuth) - tip_x;
+  const double run_y = D::platform_radius * std::sin(sphere_azimuth) - tip_y;
+  const double home_z = std::sqrt(D::rod_length * D::rod_length - run_x * run_x - run_y * run_y);
+  g.home = Pose<Scalar>::from_xyz_rpy(Scalar(0), Scalar(0), Scalar(home_z), Scalar(0), Scalar(0), Scalar(0));
+  g.characteristic_length = Scalar(D::platform_radius);
+  // One branch fits the limits at home, so this is the home assembly.
+  Vec6<Scalar> branches;
+  if (rus6_home_branches(g, branches) == Status::Ok) g.home_branch = branches;
   return g;
 }
 
