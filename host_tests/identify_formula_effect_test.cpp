@@ -40,7 +40,7 @@ ki::FormulaEffectSpec joint_spec(const std::string& name, std::vector<int> joint
 }
 
 // The GUIDE's three examples, as a robot description would carry them.
-const char* kGuideEffects = R"({
+const char* kGuideEffects = R"J({
   "family": "stewart-6ups",
   "effects": [
     {"name": "leg_thermal", "description": "legs 1 and 2 expand with temperature",
@@ -51,7 +51,7 @@ const char* kGuideEffects = R"({
     {"name": "sag", "kind": "pose", "shared": ["k"],
      "formula": {"dx": "0", "dy": "0", "dz": "-k * (x^2 + y^2)", "drx": "0", "dry": "0", "drz": "0"}}
   ]
-})";
+})J";
 
 // A node: random commands, directions, loads, temperature, time and pose.
 std::vector<double> random_node(const ki::FormulaLayout& l, std::mt19937& rng) {
@@ -129,7 +129,7 @@ TEST(FormulaEffect, GuideExamplesEqualHandWrittenCpp) {
       const int j = k + 1;
       EXPECT_NEAR(thermal.value(k, v.data(), a), a[k] * at(l.q(j)) * (at(l.temp()) - 20), 1e-15);
     }
-    const double g[3] = {3e-5, -4e-5, 240 + 40 * (n % 3)};  // g3, g6, q0
+    const double g[3] = {3e-5, -4e-5, 240.0 + 40.0 * (n % 3)};  // g3, g6, q0
     const int ramp_joint[2] = {3, 6};
     for (int k = 0; k < 2; ++k) {
       const double over = std::max(0.0, at(l.q(ramp_joint[k])) - g[2]);
@@ -226,8 +226,8 @@ TEST(FormulaEffect, KinkDerivativeIsTheMeanOfTheSides) {
 }
 
 TEST(FormulaEffect, ParseErrorNamesFileLineColumnAndPlaceInFormula) {
-  const std::string text = one_effect(R"({"name": "bad", "kind": "joint", "per_joint": ["a"],
-   "formula": "q +* a"})");
+  const std::string text = one_effect(R"J({"name": "bad", "kind": "joint", "per_joint": ["a"],
+   "formula": "q +* a"})J");
   const ki::InputError e = read_error(text);
   const auto [line, column] = line_column(text, "\"formula\"");
   EXPECT_EQ(e.file(), "robot.json");
@@ -250,13 +250,16 @@ TEST(FormulaEffect, ParseErrorNamesFileLineColumnAndPlaceInFormula) {
   EXPECT_NE(formula_error("a * q * 1e99999").find("out of range"), std::string::npos);
   EXPECT_NE(formula_error("a * 1e400").find("does not fit a double"), std::string::npos);
   EXPECT_NE(formula_error("").find("is empty"), std::string::npos);
-  EXPECT_NE(formula_error("a * sin(q, q)").find("character"), std::string::npos) << formula_error("a * sin(q, q)");
+  EXPECT_NE(formula_error("a * sin(q, q)").find("character 5: sin takes 1 argument, not 2"), std::string::npos)
+      << formula_error("a * sin(q, q)");
+  EXPECT_NE(formula_error("a * tan()").find("tan takes 1 argument, not 0"), std::string::npos);  // crashed GiNaC
+  EXPECT_NE(formula_error("a * max(q)").find("max takes 2 arguments, not 1"), std::string::npos);
   EXPECT_NE(formula_error("a / (q - q)").find("division by zero"), std::string::npos) << formula_error("a / (q - q)");
 }
 
 TEST(FormulaEffect, UnknownSymbolIsNamedWithTheAllowedOnes) {
-  const std::string text = one_effect(R"({"name": "u", "kind": "joint", "per_joint": ["a"], "inputs": ["hum"],
-   "formula": "a * q * humidity"})");
+  const std::string text = one_effect(R"J({"name": "u", "kind": "joint", "per_joint": ["a"], "inputs": ["hum"],
+   "formula": "a * q * humidity"})J");
   const ki::InputError e = read_error(text);
   const std::string m = e.message();
   EXPECT_NE(m.find("unknown symbol 'humidity'"), std::string::npos) << m;
@@ -283,42 +286,42 @@ TEST(FormulaEffect, EveryContractRuleHasItsError) {
     std::string entry, expected, at_key;
   };
   const std::vector<Case> cases = {
-      {R"({"name": "u", "kind": "joint", "per_joint": ["a", "b"], "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "per_joint": ["a", "b"], "formula": "a * q"})J",
        "the parameter 'b' is not used by the formula", "\"per_joint\""},
-      {R"({"name": "u", "kind": "joint", "shared": ["c"], "per_joint": ["a"], "formula": "a * q + c * 0"})",
+      {R"J({"name": "u", "kind": "joint", "shared": ["c"], "per_joint": ["a"], "formula": "a * q + c * 0"})J",
        "the parameter 'c' is not used", "\"shared\""},
-      {R"({"name": "thermal", "kind": "joint", "per_joint": ["a"], "formula": "a * q"})",
+      {R"J({"name": "thermal", "kind": "joint", "per_joint": ["a"], "formula": "a * q"})J",
        "clashes with the built-in effect 'thermal'", "\"name\""},
-      {R"({"name": "u", "kind": "joint", "shared": ["temp"], "formula": "temp * q"})",
+      {R"J({"name": "u", "kind": "joint", "shared": ["temp"], "formula": "temp * q"})J",
        "the shared parameter 'temp' clashes with a built-in variable", "\"shared\""},
-      {R"({"name": "u", "kind": "joint", "shared": ["q3"], "formula": "q3 * q"})",
+      {R"J({"name": "u", "kind": "joint", "shared": ["q3"], "formula": "q3 * q"})J",
        "'q3' clashes with a built-in variable", "\"shared\""},
-      {R"({"name": "u", "kind": "joint", "per_joint": ["a1"], "formula": "a1 * q"})",
+      {R"J({"name": "u", "kind": "joint", "per_joint": ["a1"], "formula": "a1 * q"})J",
        "the per-joint parameter 'a1' ends in a digit", "\"per_joint\""},
-      {R"({"name": "u", "kind": "joint", "joints": [2, 7], "per_joint": ["a"], "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "joints": [2, 7], "per_joint": ["a"], "formula": "a * q"})J",
        "joint 7 is out of range: joints are 1..6", "\"joints\""},
-      {R"({"name": "u", "kind": "joint", "joints": [0], "per_joint": ["a"], "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "joints": [0], "per_joint": ["a"], "formula": "a * q"})J",
        "joint 0 is out of range", "\"joints\""},
-      {R"({"name": "u", "kind": "joint", "joints": [2, 2], "per_joint": ["a"], "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "joints": [2, 2], "per_joint": ["a"], "formula": "a * q"})J",
        "joint 2 is listed twice", "\"joints\""},
-      {R"({"name": "u", "kind": "joint", "per_joint": ["a"], "shared": ["a"], "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "per_joint": ["a"], "shared": ["a"], "formula": "a * q"})J",
        "'a' is used twice", "\"shared\""},
-      {R"({"name": "u", "kind": "joint", "joints": [1], "per_joint": ["a"], "shared": ["a1"], "formula": "a * q + a1"})",
+      {R"J({"name": "u", "kind": "joint", "joints": [1], "per_joint": ["a"], "shared": ["a1"], "formula": "a * q + a1"})J",
        "'a1' clashes with another name", "\"per_joint\""},
-      {R"({"name": "u", "kind": "joint", "per_joint": ["a"], "start": {"b": 1}, "formula": "a * q"})",
+      {R"J({"name": "u", "kind": "joint", "per_joint": ["a"], "start": {"b": 1}, "formula": "a * q"})J",
        "'start' names 'b', which is no parameter (parameters: a1, a2, a3, a4, a5, a6)", "\"b\""},
-      {R"({"name": "u", "kind": "joint", "formula": "q"})", "the effect has no parameter", "{\"name\""},
-      {R"({"name": "u v", "kind": "joint", "shared": ["c"], "formula": "c"})", "the name must be a letter", "\"name\""},
-      {R"({"name": "u", "kind": "pose", "per_joint": ["a"], "formula": {"dz": "a"}})",
+      {R"J({"name": "u", "kind": "joint", "formula": "q"})J", "the effect has no parameter", "{\"name\""},
+      {R"J({"name": "u v", "kind": "joint", "shared": ["c"], "formula": "c"})J", "the name must be a letter", "\"name\""},
+      {R"J({"name": "u", "kind": "pose", "per_joint": ["a"], "formula": {"dz": "a"}})J",
        "a pose effect has no acting joint", "\"per_joint\""},
-      {R"({"name": "u", "kind": "pose", "shared": ["k"], "formula": {"dz": "k * q"}})", "unknown symbol 'q'",
+      {R"J({"name": "u", "kind": "pose", "shared": ["k"], "formula": {"dz": "k * q"}})J", "unknown symbol 'q'",
        "\"dz\""},
-      {R"({"name": "u", "kind": "pose", "shared": ["k"], "formula": {"dw": "k"}})", "unknown key 'dw'", "\"dw\""},
-      {R"({"name": "u", "kind": "rotary", "shared": ["k"], "formula": "k"})", "'kind' must be \"joint\" or \"pose\"",
+      {R"J({"name": "u", "kind": "pose", "shared": ["k"], "formula": {"dw": "k"}})J", "unknown key 'dw'", "\"dw\""},
+      {R"J({"name": "u", "kind": "rotary", "shared": ["k"], "formula": "k"})J", "'kind' must be \"joint\" or \"pose\"",
        "\"rotary\""},
-      {R"({"name": "u", "kind": "joint", "shared": ["k"], "formula": "k", "colour": 1})", "unknown key 'colour'",
+      {R"J({"name": "u", "kind": "joint", "shared": ["k"], "formula": "k", "colour": 1})J", "unknown key 'colour'",
        "\"colour\""},
-      {R"({"name": "u", "kind": "joint", "joints": [1.5], "shared": ["k"], "formula": "k"})",
+      {R"J({"name": "u", "kind": "joint", "joints": [1.5], "shared": ["k"], "formula": "k"})J",
        "'joints' entries must be whole joint numbers", "1.5"},
   };
   for (const Case& c : cases) {
@@ -332,17 +335,17 @@ TEST(FormulaEffect, EveryContractRuleHasItsError) {
   }
 
   // Two effects with one name: the second is named, with the first's place.
-  const std::string twice = R"({"effects": [
+  const std::string twice = R"J({"effects": [
   {"name": "u", "kind": "joint", "shared": ["k"], "formula": "k"},
-  {"name": "u", "kind": "joint", "shared": ["c"], "formula": "c * q"}]})";
+  {"name": "u", "kind": "joint", "shared": ["c"], "formula": "c * q"}]})J";
   const ki::InputError e = read_error(twice);
   EXPECT_NE(e.message().find("two effects are named 'u' (the other is 'effects/0')"), std::string::npos) << e.what();
   EXPECT_EQ(e.line(), 3u);
   // Not an array; malformed JSON (the reader's own errors).
-  EXPECT_NE(read_error(R"({"effects": {}})").message().find("'effects' must be an array"), std::string::npos);
-  EXPECT_NE(read_error(R"({"effects": [)").message().find("malformed JSON"), std::string::npos);
+  EXPECT_NE(read_error(R"J({"effects": {}})J").message().find("'effects' must be an array"), std::string::npos);
+  EXPECT_NE(read_error(R"J({"effects": [)J").message().find("malformed JSON"), std::string::npos);
   // No key: no effects.
-  EXPECT_TRUE(ki::read_formula_effects(R"({"family": "stewart-6ups"})", "robot.json", kContext).empty());
+  EXPECT_TRUE(ki::read_formula_effects(R"J({"family": "stewart-6ups"})J", "robot.json", kContext).empty());
 }
 
 TEST(FormulaEffect, NonFiniteValueAtANodeIsNamed) {

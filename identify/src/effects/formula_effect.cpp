@@ -753,6 +753,23 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
         fail_at(t.begin, "unknown function " + in_quotes(t.text) + " (functions: " + join(fs) + ")");
       }
       if (!call && is_function_name(t.text)) fail_at(t.begin, in_quotes(t.text) + " is a function: write " + t.text + "(…)");
+      if (call) {
+        // The arity, counted here: GiNaC's function table matches a call
+        // with no argument to any arity ("tan()" reached tan's evaluation
+        // with no argument and crashed, found by fuzzing).
+        std::size_t arguments = text.tokens[k + 2 < text.tokens.size() ? k + 2 : k + 1].kind == Token::Close ? 0 : 1;
+        int depth = 0;
+        for (std::size_t i = k + 1; i < text.tokens.size(); ++i) {
+          const Token::Kind kind_i = text.tokens[i].kind;
+          if (kind_i == Token::Open) ++depth;
+          if (kind_i == Token::Close && --depth == 0) break;
+          if (kind_i == Token::Comma && depth == 1) ++arguments;
+        }
+        const std::size_t wanted = t.text == "atan2" || t.text == "min" || t.text == "max" ? 2 : 1;
+        if (arguments != wanted)
+          fail_at(t.begin, t.text + " takes " + std::to_string(wanted) + (wanted == 1 ? " argument" : " arguments") +
+                               ", not " + std::to_string(arguments));
+      }
       if (!call && !sources.count(t.text) && t.text != "pi")
         fail_at(t.begin, "unknown symbol " + in_quotes(t.text) + " (allowed: " + join(allowed) + ")");
     }
