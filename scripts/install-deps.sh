@@ -7,6 +7,7 @@ packages=(
   cmake ninja-build g++ make                       # host build
   libeigen3-dev                                    # core/ (and everything)
   nlohmann-json3-dev libcli11-dev                  # identify/, apps/
+  libginac-dev pkg-config                          # identify/: formula effects (parse, differentiate, print C++); found by pkg-config
   libgtest-dev libgmock-dev libbenchmark-dev       # tests, benchmarks
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib  # firmware
   qemu-system-arm                                  # firmware tests
