@@ -7,6 +7,8 @@
 // workspace with tilts, double and float.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "kincal/core/hybrid_exact.hpp"
@@ -167,6 +169,30 @@ TEST(HybridExact, FloatFollowsDouble) {
     EXPECT_LT((qf.cast<double>() - q).head<3>().cwiseAbs().maxCoeff(), 2e-3) << "pose " << n;
     EXPECT_LT((qf.cast<double>() - q).tail<3>().cwiseAbs().maxCoeff(), 2e-5) << "pose " << n;
   }
+}
+
+// The chains' libm-free sin / cos (halving, series, doubling) against libm.
+TEST(HybridExact, SinCosWithoutLibmMatchesLibm) {
+  double worst = 0, worst_far = 0, worst_f = 0;
+  for (int k = -20000; k <= 20000; ++k) {
+    const double a = 1e-3 * k + 1e-7 * (k % 7);  // -20 … 20 rad, off the grid
+    double s = 0, c = 0;
+    ASSERT_TRUE(kincal::hybrid_exact_detail::sin_cos(a, s, c));
+    const double gap = std::max(std::abs(s - std::sin(a)), std::abs(c - std::cos(a)));
+    (std::abs(a) <= 4.0 ? worst : worst_far) = std::max(std::abs(a) <= 4.0 ? worst : worst_far, gap);
+    float sf = 0, cf = 0;
+    ASSERT_TRUE(kincal::hybrid_exact_detail::sin_cos(float(a), sf, cf));
+    worst_f = std::max({worst_f, std::abs(double(sf) - std::sin(double(float(a)))),
+                        std::abs(double(cf) - std::cos(double(float(a))))});
+  }
+  EXPECT_LT(worst, 1e-14);      // joint angles (|a| ≤ 4 rad): at most five doublings
+  EXPECT_LT(worst_far, 5e-14);  // to 20 rad: eight, about a rounding each
+  EXPECT_LT(worst_f, 2e-5);
+  double s = 7, c = 7;
+  EXPECT_FALSE(kincal::hybrid_exact_detail::sin_cos(1e5, s, c));
+  EXPECT_FALSE(kincal::hybrid_exact_detail::sin_cos(std::nan(""), s, c));
+  EXPECT_EQ(s, 7.0);
+  EXPECT_EQ(c, 7.0);
 }
 
 TEST(HybridExact, BadInputIsAStatus) {

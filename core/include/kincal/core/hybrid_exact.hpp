@@ -31,21 +31,37 @@
 #include "kincal/core/small_lu.hpp"
 #include "kincal/core/status.hpp"
 
+#if defined(__GNUC__)
+#define KINCAL_EXACT_NOINLINE __attribute__((noinline))
+#else
+#define KINCAL_EXACT_NOINLINE
+#endif
+
 namespace kincal {
 
-// One chain: T_end = T_parent · base · Π_j (link[j] · M_j(x_j)) · end. Nominal
-// (hybrid_nominal_chains) or with Δχ folded into base, links and end.
-template <class Scalar> struct HybridChainLinks {
+// One chain of N joints: T_end = T_parent · base · Π_j (link[j] · M_j(x_j)) ·
+// end. Nominal (hybrid_nominal_chains) or with Δχ folded into base, links
+// and end.
+template <class Scalar, int N> struct HybridChainLinks {
+  static constexpr int kJoints = N;
   Pose<Scalar> base;
-  Pose<Scalar> link[6];
+  Pose<Scalar> link[N];
   Pose<Scalar> end;
+};
+template <class Scalar> using HybridUpsLinks = HybridChainLinks<Scalar, 6>;     // U (2 R), P, S (3 R)
+template <class Scalar> using HybridSerialLinks = HybridChainLinks<Scalar, 3>;  // UP: U (2 R), P; wrist: 3 R
+
+// Each joint's axis in the world at a configuration: where its twist acts.
+template <class Scalar, int N> struct HybridJointAxes {
+  Vec3<Scalar> direction[N];
+  Vec3<Scalar> point[N];
 };
 
 // UPS limb i as a chain from {R0} to its S centre frame {R_6,i}, and what
 // closes it: the attachment of that frame on the platform, and the
 // reference axes its closed-form start is taken about.
 template <class Scalar> struct HybridUpsLimb {
-  HybridChainLinks<Scalar> links;  // U (2 R), P, S (3 R): joint 2 prismatic
+  HybridUpsLinks<Scalar> links;  // U (2 R), P, S (3 R): joint 2 prismatic
   Pose<Scalar> attach;             // platform frame → the limb's end frame
   Vec3<Scalar> origin;             // A1i: the U centre
   Mat3<Scalar> axes;               // the reference end frame's axes [t, u × t, u]
@@ -58,8 +74,8 @@ template <class Scalar> struct HybridUpsLimb {
 // do not fit its static RAM).
 template <class Scalar> struct HybridChains {
   HybridUpsLimb<Scalar> ups[3];
-  HybridChainLinks<Scalar> up;      // U (2 R), P: from {R0} to the platform frame (at A64)
-  HybridChainLinks<Scalar> wrist;   // 3 R from the platform frame to the tool frame at P
+  HybridSerialLinks<Scalar> up;     // U (2 R), P: from {R0} to the platform frame (at A64)
+  HybridSerialLinks<Scalar> wrist;  // 3 R from the platform frame to the tool frame at P
   Vec6<Scalar> joint_offset = Vec6<Scalar>::Zero();  // physical − commanded (nominal + Δξ)
   Scalar up_split = Scalar(345);    // e = |A44 A64| (seed 000 Table 1)
 };
@@ -81,14 +97,57 @@ template <class S> Mat3<S> columns(const Vec3<S>& x, const Vec3<S>& y, const Vec
   return m;
 }
 
+// sin a and cos a without libm: a halved until |a| ≤ 1/8, their series there
+// (to a⁹ and a¹⁰: the next terms are below 1e-17), then doubled back
+// (sin 2a = 2 sin a cos a, cos 2a = 1 − 2 sin² a); each doubling costs about
+// one rounding, and joint angles need at most five. libm's sin / cos carry
+// a large-argument reduction that is 0.7 KiB of Cortex-M stack on the
+// controller's deepest path (docs/benchmarks.md). False (outputs untouched)
+// for |a| > 4000 rad or not finite: no joint of these machines turns that far.
+template <class S> bool sin_cos(S a, S& sine, S& cosine) {
+  const S limit(4000);
+  if (!(a <= limit && a >= -limit)) return false;
+  int halvings = 0;
+  while (a > S(0.125) || a < S(-0.125)) {
+    a *= S(0.5);
+    ++halvings;
+  }
+  const S t = a * a;
+  S s = a * (S(1) - t / S(6) * (S(1) - t / S(20) * (S(1) - t / S(42) * (S(1) - t / S(72)))));
+  S c = S(1) - t / S(2) * (S(1) - t / S(12) * (S(1) - t / S(30) * (S(1) - t / S(56) * (S(1) - t / S(90)))));
+  for (int k = 0; k < halvings; ++k) {
+    const S s2 = S(2) * s * c;
+    c = S(1) - S(2) * s * s;
+    s = s2;
+  }
+  sine = s;
+  cosine = c;
+  return true;
+}
+
+template <class S> Mat3<S> rotation_about(int axis, S angle) {
+  S s(0), c(1);
+  sin_cos(angle, s, c);  // a finite error angle (checked before it gets here)
+  Mat3<S> R = Mat3<S>::Identity();
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  R(i, i) = c;
+  R(j, j) = c;
+  R(i, j) = -s;
+  R(j, i) = s;
+  return R;
+}
+
 template <class S> Pose<S> joint_motion(bool prismatic, S x) {
   if (prismatic) return make_pose<S>(Mat3<S>::Identity(), Vec3<S>(S(0), S(0), x));
-  return make_pose<S>(rot_z(x), Vec3<S>::Zero());
+  return make_pose<S>(rotation_about(2, x), Vec3<S>::Zero());
 }
 
 // E = Trans(Δx, Δy, Δz)·Rx(Δα)·Ry(Δβ)·Rz(Δγ) (Appendix A; d = (Δx … Δγ)).
 template <class S> Pose<S> error_transform(const S* d) {
-  return make_pose<S>(Mat3<S>(rot_x(d[3]) * rot_y(d[4]) * rot_z(d[5])), Vec3<S>(d[0], d[1], d[2]));
+  Mat3<S> R = rotation_about(0, d[3]);
+  R = R * rotation_about(1, d[4]);
+  R = R * rotation_about(2, d[5]);
+  return make_pose<S>(R, Vec3<S>(d[0], d[1], d[2]));
 }
 
 // A joint frame's five kept errors as six (Δz omitted for a prismatic, Δγ for
@@ -103,11 +162,11 @@ template <class S> void expand_joint_error(const S* e, bool prismatic, S* d) {
 
 // The links of a chain from the world poses of its joint frames at a
 // reference configuration x_ref and of its end frame there.
-template <class S>
-void set_links(HybridChainLinks<S>& c, int joints, const bool* prismatic, const Pose<S>& parent_ref,
-               const Pose<S>* frames, const S* x_ref, const Pose<S>& end_ref) {
+template <class S, int N>
+void set_links(HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent_ref, const Pose<S>* frames,
+               const S* x_ref, const Pose<S>& end_ref) {
   Pose<S> prev = parent_ref * c.base;
-  for (int j = 0; j < joints; ++j) {
+  for (int j = 0; j < N; ++j) {
     c.link[j] = prev.inverse() * frames[j];
     prev = frames[j] * joint_motion(prismatic[j], x_ref[j]);
   }
@@ -116,14 +175,14 @@ void set_links(HybridChainLinks<S>& c, int joints, const bool* prismatic, const 
 
 // Folds a chain's Δη (frame 0's six if `base_error`, then five per joint)
 // into its base and links.
-template <class S>
-void fold_errors(HybridChainLinks<S>& c, int joints, const bool* prismatic, bool base_error, const S* eta) {
+template <class S, int N>
+void fold_errors(HybridChainLinks<S, N>& c, const bool* prismatic, bool base_error, const S* eta) {
   int k = 0;
   if (base_error) {
     c.base = c.base * error_transform(eta);
     k = 6;
   }
-  for (int j = 0; j < joints; ++j, k += 5) {
+  for (int j = 0; j < N; ++j, k += 5) {
     S d[6];
     expand_joint_error(eta + k, prismatic[j], d);
     c.link[j] = c.link[j] * error_transform(d);
@@ -142,21 +201,28 @@ template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
     T.p += x * T.R.col(2);
     return;
   }
-  const S c = std::cos(x), s = std::sin(x);
+  S s(0), c(1);
+  if (!sin_cos(x, s, c)) {  // a diverged iterate: poison the pose, the caller's finiteness test stops
+    T.p.setConstant(x - x + S(NAN));
+    return;
+  }
   const Vec3<S> x_axis = T.R.col(0);
   T.R.col(0) = c * x_axis + s * T.R.col(1);
   T.R.col(1) = c * T.R.col(1) - s * x_axis;
 }
 
-// A chain's end pose at joint values x, and each joint's axis frame (z along
-// the axis, through its origin) in `axis` (if given).
-template <class S>
-Pose<S> chain_end(const HybridChainLinks<S>& c, int joints, const bool* prismatic, const Pose<S>& parent, const S* x,
-                  Pose<S>* axis) {
+// A chain's end pose at joint values x, and each joint's axis (direction,
+// a point on it) in `axes` if given.
+template <class S, int N>
+Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent, const S* x,
+                  HybridJointAxes<S, N>* axes) {
   Pose<S> T = parent * c.base;
-  for (int j = 0; j < joints; ++j) {
+  for (int j = 0; j < N; ++j) {
     T = T * c.link[j];
-    if (axis != nullptr) axis[j] = T;
+    if (axes != nullptr) {
+      axes->direction[j] = T.R.col(2);
+      axes->point[j] = T.p;
+    }
     move_along_joint(T, prismatic[j], x[j]);
   }
   return T * c.end;
@@ -235,11 +301,11 @@ template <class S> void build_ups_limb(const HybridGeometry<S>& g, int i, const 
   ups_reference_frames(A1, A6, frames);
   const S x_ref[6] = {S(0), S(0), (A6 - A1).norm(), S(0), S(0), S(0)};
   limb.links.base = make_pose<S>(Mat3<S>::Identity(), A1);  // {R_0,i}: at A1i, axes of {R0}
-  set_links(limb.links, 6, kUpsPrismatic, world, frames, x_ref, frames[5]);
+  set_links(limb.links, kUpsPrismatic, world, frames, x_ref, frames[5]);
   limb.attach = platform_ref.inverse() * frames[5];
   limb.origin = A1;
   limb.axes = frames[5].R;
-  if (eta != nullptr) fold_errors(limb.links, 6, kUpsPrismatic, true, eta);
+  if (eta != nullptr) fold_errors(limb.links, kUpsPrismatic, true, eta);
 }
 
 // The UP limb (U at A0 = Rx(θ1)·Ry(θ2), P along w with variable c − e) and
@@ -247,7 +313,7 @@ template <class S> void build_ups_limb(const HybridGeometry<S>& g, int i, const 
 // blocks (21, 15) and the tool frame's six errors folded in unless null.
 template <class S>
 void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta, const S* wrist_eta,
-                         const S* tool_eta, HybridChainLinks<S>& up, HybridChainLinks<S>& wrist) {
+                         const S* tool_eta, HybridSerialLinks<S>& up, HybridSerialLinks<S>& wrist) {
   using namespace hybrid_exact_detail;
   const Vec3<S> ex = Vec3<S>::UnitX(), ey = Vec3<S>::UnitY(), ez = Vec3<S>::UnitZ();
   const S c_ref = g.home.extension, e = up_split;
@@ -261,8 +327,8 @@ void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta
     };
     const S x_ref[3] = {S(0), S(0), c_ref - e};
     up.base = Pose<S>();
-    set_links(up, 3, kUpPrismatic, world, frames, x_ref, platform_ref);
-    if (up_eta != nullptr) fold_errors(up, 3, kUpPrismatic, true, up_eta);
+    set_links(up, kUpPrismatic, world, frames, x_ref, platform_ref);
+    if (up_eta != nullptr) fold_errors(up, kUpPrismatic, true, up_eta);
   }
   {
     const S zq = c_ref + g.platform_to_wrist, zp0 = zq + g.wrist_link;
@@ -273,9 +339,9 @@ void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta
     };
     const S x_ref[3] = {S(0), S(0), S(0)};
     wrist.base = Pose<S>();
-    set_links(wrist, 3, kWristPrismatic, platform_ref, frames, x_ref,
+    set_links(wrist, kWristPrismatic, platform_ref, frames, x_ref,
               make_pose<S>(g.tool_offset, Vec3<S>((zp0 + g.tool_length) * ez)));
-    if (wrist_eta != nullptr) fold_errors(wrist, 3, kWristPrismatic, false, wrist_eta);
+    if (wrist_eta != nullptr) fold_errors(wrist, kWristPrismatic, false, wrist_eta);
     if (tool_eta != nullptr) wrist.end = wrist.end * error_transform(tool_eta);
   }
 }
@@ -340,42 +406,43 @@ template <> struct HybridExactTolerance<float> {
 
 namespace hybrid_exact_detail {
 
-// Newton on the joint variables x of a 6-joint serial chain (`ends(x, axis)`
-// writes the six joint axis frames and returns the end pose) until its end
+// Newton on the joint variables x of a 6-joint serial chain (`ends(x, axes)`
+// returns the end pose and, if asked, the six joint axes) until its end
 // coincides with `target`. The Jacobian's columns are the joints' twists at
 // the end point; revolute columns and rotation rows are scaled by the
 // characteristic length L so the LU's pivot ratio judges a dimensionless
-// matrix (the singularity test of core). On Ok `lu` holds the last
-// factorisation (the unscaled relation J·δx = δ(end) through `scale`).
+// matrix (the singularity test of core), built in the LU's own storage.
+// On Ok `lu` holds the last factorisation (δy = J⁻¹·δ(end), revolute y = L·θ).
 template <class S, class Ends>
-Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu,
-                    int* iterations) {
+Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu) {
   S previous = S(0);
   for (int it = 0;; ++it) {
-    Pose<S> axis[6];
-    const Pose<S> end = ends(x, axis);
+    HybridJointAxes<S, 6> axes;
+    const Pose<S> end = ends(x, &axes);
     Vec6<S> e = closure_residual(target, end);
     e.template tail<3>() *= L;
     const S err = e.cwiseAbs().maxCoeff();
-    if (!(err == err)) return Status::InvalidInput;
-    if (iterations != nullptr) *iterations = it;
+    if (!(err == err)) return Status::NotConverged;
     // Closed: the factorisation of the previous iterate stays in `lu` (the
     // FK's outer Newton needs a Jacobian here, not the last digit of one).
     if (it > 0 && (err <= HybridExactTolerance<S>::closure ||
                    (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous)))
       return Status::Ok;
-    Mat6<S> J;
-    for (int j = 0; j < 6; ++j) {
-      const Vec3<S> a = axis[j].R.col(2);
-      if (prismatic[j]) {
-        J.template block<3, 1>(0, j) = a;
-        J.template block<3, 1>(3, j).setZero();
-      } else {  // (a × (P − p), a)·dθ, with dθ = dy / L and the rows ω × L
-        J.template block<3, 1>(0, j) = a.cross(Vec3<S>(end.p - axis[j].p)) / L;
-        J.template block<3, 1>(3, j) = a;
+    {
+      auto J = lu.storage();
+      for (int j = 0; j < 6; ++j) {
+        const Vec3<S>& a = axes.direction[j];
+        if (prismatic[j]) {
+          J.template block<3, 1>(0, j) = a;
+          J.template block<3, 1>(3, j).setZero();
+        } else {  // (a × (P − p), a)·dθ, with dθ = dy / L and the rows ω × L
+          const Vec3<S> arm = end.p - axes.point[j];
+          J.template block<3, 1>(0, j) = a.cross(arm) / L;
+          J.template block<3, 1>(3, j) = a;
+        }
       }
     }
-    if (!factor_regular(lu, J)) return Status::Singular;
+    if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
     if (it == 0 && err <= HybridExactTolerance<S>::closure) return Status::Ok;  // the start was the solution
     if (it == HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
     const Vec6<S> step = lu.solve(e);
@@ -385,10 +452,9 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
     // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
     // shrink it a hundredfold, so the regime is quadratic), the chain is
     // closed without evaluating it again — one chain evaluation of three
-    // saved per closure (the twist fixed point of compensation.hpp judges
-    // its last iterate the same way). The tests check the result against
-    // the FK to 1e-9 mm.
-    if (it > 0 && err < S(0.01) * previous && err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure)
+    // saved per closure. The tests check the result against the FK to 1e-9 mm.
+    if (it > 0 && err < S(0.01) * previous &&
+        err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure)
       return Status::Ok;
     previous = err;
   }
@@ -401,17 +467,17 @@ Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S* 
   const Pose<S> target = platform * limb.attach;
   if (!nominal_ups_joints(limb.origin, limb.axes, target, x)) return Status::Unreachable;
   const Pose<S> world;
-  auto ends = [&](const S* xs, Pose<S>* axis) { return chain_end(limb.links, 6, kUpsPrismatic, world, xs, axis); };
-  return close_serial(ends, kUpsPrismatic, target, L, x, lu, nullptr);
+  auto ends = [&](const S* xs, HybridJointAxes<S, 6>* axes) {
+    return chain_end(limb.links, kUpsPrismatic, world, xs, axes);
+  };
+  return close_serial(ends, kUpsPrismatic, target, L, x, lu);
 }
 
-// The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
-// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from the
-// nominal machine's closed-form configuration there. Writes x and the
-// platform pose at the solution.
+// The nominal machine's configuration at a tool pose as the serial chain's
+// start (θ1, θ2, c − e, θ4, θ5, θ6); not inlined, so its frames are off the
+// stack while the Newton runs.
 template <class S>
-Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridChainLinks<S>& up,
-                          const HybridChainLinks<S>& wrist, S up_split, const Pose<S>& tool, S* x, Pose<S>& platform) {
+KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up_split, const Pose<S>& tool, S* x) {
   HybridFrames<S> f;
   Vec3<S> angles;
   const Status s = hybrid_frames_at_pose(nominal, tool, f, angles);
@@ -420,19 +486,39 @@ Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridChainLin
   x[1] = std::atan2(f.Rp(0, 2), f.Rp(0, 0));
   x[2] = f.extension - up_split;
   for (int j = 0; j < 3; ++j) x[3 + j] = angles(j);
+  return Status::Ok;
+}
+
+// The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
+// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from the
+// nominal machine's closed-form configuration there. Writes x and the
+// platform pose at the solution.
+template <class S>
+Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
+                          const HybridSerialLinks<S>& wrist, S up_split, const Pose<S>& tool, S* x, Pose<S>& platform) {
+  const Status s = serial_start(nominal, up_split, tool, x);
+  if (s != Status::Ok) return s;
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
   const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
   Pose<S> target;
   target.R = Rt * tool.R;
   target.p = nominal.workpiece_origin + Rt * tool.p;
   const Pose<S> world;
-  auto serial = [&](const S* xs, Pose<S>* axis) {
-    platform = chain_end(up, 3, kUpPrismatic, world, xs, axis);
-    return chain_end(wrist, 3, kWristPrismatic, platform, xs + 3, axis == nullptr ? nullptr : axis + 3);
+  auto serial = [&](const S* xs, HybridJointAxes<S, 6>* axes) {
+    if (axes == nullptr) {
+      platform = chain_end(up, kUpPrismatic, world, xs, static_cast<HybridJointAxes<S, 3>*>(nullptr));
+      return chain_end(wrist, kWristPrismatic, platform, xs + 3, static_cast<HybridJointAxes<S, 3>*>(nullptr));
+    }
+    HybridJointAxes<S, 3> half;
+    platform = chain_end(up, kUpPrismatic, world, xs, &half);
+    for (int j = 0; j < 3; ++j) axes->direction[j] = half.direction[j], axes->point[j] = half.point[j];
+    const Pose<S> end = chain_end(wrist, kWristPrismatic, platform, xs + 3, &half);
+    for (int j = 0; j < 3; ++j) axes->direction[3 + j] = half.direction[j], axes->point[3 + j] = half.point[j];
+    return end;
   };
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
   SmallLu<S, 6> lu;
-  const Status closed = close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, lu, nullptr);
+  const Status closed = close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, lu);
   if (closed == Status::Ok) serial(x, nullptr);  // the platform at the solution
   return closed;
 }
@@ -488,11 +574,6 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   return s;
 }
 
-#if defined(__GNUC__)
-#define KINCAL_EXACT_NOINLINE __attribute__((noinline))
-#else
-#define KINCAL_EXACT_NOINLINE
-#endif
 
 namespace hybrid_exact_detail {
 
@@ -502,7 +583,7 @@ namespace hybrid_exact_detail {
 template <class S>
 KINCAL_EXACT_NOINLINE Status stage_up_and_wrist(const HybridGeometry<S>& nominal, S up_split, const S* chi,
                                                 const Pose<S>& tool, S* x, Pose<S>& platform) {
-  HybridChainLinks<S> up, wrist;
+  HybridSerialLinks<S> up, wrist;
   build_serial_chains(nominal, up_split, chi + HybridErrorLayout::up(), chi + HybridErrorLayout::wrist(),
                       chi + HybridErrorLayout::tool(), up, wrist);
   return close_up_and_wrist(nominal, up, wrist, up_split, tool, x, platform);
@@ -574,8 +655,8 @@ FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains
   S xs[3] = {guess.theta1, guess.theta2, guess.extension - c.up_split};
   const Pose<S> world;
   for (int it = 0;; ++it) {
-    Pose<S> axis[3];
-    const Pose<S> platform = chain_end(c.up, 3, kUpPrismatic, world, xs, axis);
+    HybridJointAxes<S, 3> axis;
+    const Pose<S> platform = chain_end(c.up, kUpPrismatic, world, xs, &axis);
     Vec3<S> r;
     Mat3<S> M;
     for (int i = 0; i < 3; ++i) {
@@ -589,12 +670,12 @@ FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains
       const Vec3<S> P = (platform * c.ups[i].attach).p;
       r(i) = xu[2] - physical(i);
       for (int k = 0; k < 3; ++k) {  // the UP joint k's twist at the attachment, in close_serial's scaling
-        const Vec3<S> a = axis[k].R.col(2);
+        const Vec3<S>& a = axis.direction[k];
         Vec6<S> t = Vec6<S>::Zero();
         if (kUpPrismatic[k]) {
           t.template head<3>() = a;
         } else {
-          const Vec3<S> arm = P - axis[k].p;
+          const Vec3<S> arm = P - axis.point[k];
           t.template head<3>() = a.cross(arm);
           t.template tail<3>() = L * a;
         }
@@ -604,7 +685,8 @@ FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains
     report.iterations = it;
     report.residual = r.cwiseAbs().maxCoeff();
     if (report.residual <= tolerance) {
-      const Pose<S> T = chain_end<S>(c.wrist, 3, kWristPrismatic, platform, physical.data() + 3, nullptr);
+      const Pose<S> T = chain_end(c.wrist, kWristPrismatic, platform, physical.data() + 3,
+                                      static_cast<HybridJointAxes<S, 3>*>(nullptr));
       Pose<S> out;
       out.R = nominal.workpiece_rotation * T.R;
       out.p = nominal.workpiece_rotation * (T.p - nominal.workpiece_origin);
