@@ -8,14 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x)                                      \
-  do {                                                       \
-    if (!(x)) {                                              \
-      std::fprintf(stderr, "eigen_assert failed: %s\n", #x); \
-      std::abort();                                          \
-    }                                                        \
-  } while (false)
+#include "eigen_no_malloc.hpp"  // first: before anything includes Eigen
 
 #include <gtest/gtest.h>
 

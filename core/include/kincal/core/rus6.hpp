@@ -353,36 +353,11 @@ FkReport<Scalar> rus6_fk(const Rus6Geometry<Scalar>& g, const Vec6<Scalar>& q, c
   }
   Eigen::Matrix<Scalar, 3, 6> tips;
   for (int i = 0; i < 6; ++i) tips.col(i) = rus6_crank_tip(g, i, q(i) + g.joint_offset(i));
-  const Scalar tolerance = options.relative_residual * g.rod_length.cwiseAbs().maxCoeff();
-  const Scalar inv_length = Scalar(1) / g.characteristic_length;
-  Pose<Scalar> x = guess;
-  for (int it = 0;; ++it) {
-    const Eigen::Matrix<Scalar, 3, 6> arms = x.R * g.platform_joints;
-    Eigen::Matrix<Scalar, 3, 6> rods = arms - tips;
-    rods.colwise() += x.p;
-    const Vec6<Scalar> lengths = rods.colwise().norm().transpose();
-    const Vec6<Scalar> residual = lengths - g.rod_length;
-    report.iterations = it;
-    report.residual = residual.cwiseAbs().maxCoeff();
-    if (report.residual < tolerance) {  // also false for NaN
-      pose = x;
-      report.status = Status::Ok;
-      return report;
-    }
-    if (it == options.max_iterations || !(report.residual == report.residual)) break;
-    SmallLu<Scalar, 6> lu;
-    stewart_jacobian_into(lu.storage(), arms, rods, lengths);
-    lu.storage().template rightCols<3>() *= inv_length;
-    if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) {
-      report.status = Status::Singular;
-      return report;
-    }
-    Twist<Scalar> step = -lu.solve(residual);
-    step.template tail<3>() *= inv_length;
-    x = apply_twist(x, step);
-  }
-  report.status = Status::NotConverged;
-  return report;
+  // The 6-UPS's Newton with the crank tips as the anchors and the rods as
+  // the distances (stewart.hpp six_distance_fk).
+  return six_distance_fk(tips, g.platform_joints, g.rod_length, g.characteristic_length,
+                         options.relative_residual * g.rod_length.cwiseAbs().maxCoeff(), options.max_iterations,
+                         guess, pose);
 }
 
 template <class Scalar>

@@ -129,6 +129,52 @@ template <class Scalar> struct FkOptions {
   Scalar relative_residual = Tolerance<Scalar>::fk_residual;  // × the largest joint value
 };
 
+// The platform pose where six platform points p_i (platform frame) lie at
+// distances ℓ_i from six anchors a_i (base frame): |R·p_i + t − a_i| = ℓ_i,
+// by Newton's method with the analytic Jacobian of stewart_jacobian_into, each
+// step a twist applied with apply_twist (the iteration stays on SE(3)), from
+// `guess`. The 6-UPS's FK (anchors the base joints, distances the leg
+// lengths) and the 6-RUS's (anchors the crank tips, distances the rods).
+// Writes `pose` only on Ok; stops below `tolerance` (mm).
+template <class Scalar>
+FkReport<Scalar> six_distance_fk(const Eigen::Matrix<Scalar, 3, 6>& anchors, const Eigen::Matrix<Scalar, 3, 6>& points,
+                                 const Vec6<Scalar>& distances, Scalar characteristic_length, Scalar tolerance,
+                                 int max_iterations, const Pose<Scalar>& guess, Pose<Scalar>& pose) {
+  FkReport<Scalar> report;
+  const Scalar inv_length = Scalar(1) / characteristic_length;
+  Pose<Scalar> x = guess;
+  for (int it = 0;; ++it) {
+    const Eigen::Matrix<Scalar, 3, 6> arms = x.R * points;
+    Eigen::Matrix<Scalar, 3, 6> legs = arms - anchors;
+    legs.colwise() += x.p;
+    const Vec6<Scalar> lengths = legs.colwise().norm().transpose();
+    const Vec6<Scalar> residual = lengths - distances;
+    report.iterations = it;
+    report.residual = residual.cwiseAbs().maxCoeff();
+    if (report.residual < tolerance) {  // also false for NaN
+      pose = x;
+      report.status = Status::Ok;
+      return report;
+    }
+    if (it == max_iterations || !(report.residual == report.residual)) break;
+    // Solve in scaled unknowns (angles × L) so the singularity test is
+    // dimensionless, then scale back. The Jacobian is built in the LU's own
+    // storage (no copies on the controller's stack).
+    SmallLu<Scalar, 6> lu;
+    stewart_jacobian_into(lu.storage(), arms, legs, lengths);
+    lu.storage().template rightCols<3>() *= inv_length;
+    if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) {
+      report.status = Status::Singular;
+      return report;
+    }
+    Twist<Scalar> step = -lu.solve(residual);
+    step.template tail<3>() *= inv_length;
+    x = apply_twist(x, step);
+  }
+  report.status = Status::NotConverged;
+  return report;
+}
+
 // FK: platform pose for actuator commands q, by Newton's method on
 // l(pose) − (q + offset) = 0 with the analytic Jacobian above; each step is a
 // twist applied with apply_twist, so the iteration stays on SE(3). Starts from
@@ -148,39 +194,8 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
     return report;
   }
   const Vec6<Scalar> target = q + g.length_offset;
-  const Scalar tolerance = options.relative_residual * target.cwiseAbs().maxCoeff();
-  const Scalar inv_length = Scalar(1) / g.characteristic_length;
-  Pose<Scalar> x = guess;
-  for (int it = 0;; ++it) {
-    const Eigen::Matrix<Scalar, 3, 6> arms = x.R * g.platform;
-    Eigen::Matrix<Scalar, 3, 6> legs = arms - g.base;
-    legs.colwise() += x.p;
-    const Vec6<Scalar> lengths = legs.colwise().norm().transpose();
-    const Vec6<Scalar> residual = lengths - target;
-    report.iterations = it;
-    report.residual = residual.cwiseAbs().maxCoeff();
-    if (report.residual < tolerance) {  // also false for NaN
-      pose = x;
-      report.status = Status::Ok;
-      return report;
-    }
-    if (it == options.max_iterations || !(report.residual == report.residual)) break;
-    // Solve in scaled unknowns (angles × L) so the singularity test is
-    // dimensionless, then scale back. The Jacobian is built in the LU's own
-    // storage (no copies on the controller's stack).
-    SmallLu<Scalar, 6> lu;
-    stewart_jacobian_into(lu.storage(), arms, legs, lengths);
-    lu.storage().template rightCols<3>() *= inv_length;
-    if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) {
-      report.status = Status::Singular;
-      return report;
-    }
-    Twist<Scalar> step = -lu.solve(residual);
-    step.template tail<3>() *= inv_length;
-    x = apply_twist(x, step);
-  }
-  report.status = Status::NotConverged;
-  return report;
+  return six_distance_fk(g.base, g.platform, target, g.characteristic_length,
+                         options.relative_residual * target.cwiseAbs().maxCoeff(), options.max_iterations, guess, pose);
 }
 
 template <class Scalar>
