@@ -32,7 +32,7 @@ dict_of() {
 # GiNaC's and CLN's own leaks (every target linking identify/ has CLN's
 # 26 bytes from start-up; GiNaC's parser leaks per syntax error) are not
 # findings: host_tests/lsan.supp. Ours still are.
-export LSAN_OPTIONS="suppressions=$here/../host_tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export LSAN_OPTIONS="suppressions=$here/../host_tests/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 
 failed=0
 for t in "${targets[@]}"; do

@@ -71,8 +71,10 @@ sanitize_skip+='|HybridTrackerEffect|HybridAcrossMachines'
 sanitize_skip+='|EachPhysicalGroupIsAbsorbedAndCompensated|IndependentDiagnosis'
 
 # The sanitizer builds (sanitize, fuzz) report leaks, but not GiNaC's and
-# CLN's own (host_tests/lsan.supp): ours still are.
-export LSAN_OPTIONS="suppressions=$PWD/host_tests/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+# CLN's own (host_tests/lsan.supp): ours still are. print_suppressions=0:
+# the statistics LeakSanitizer prints at exit would be extra lines on the
+# tool's stderr, which the tests read.
+export LSAN_OPTIONS="suppressions=$PWD/host_tests/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 
 mkdir -p build
 for stage in "${stages[@]}"; do
