@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 
+#include "kincal/core/hybrid_exact.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
@@ -141,45 +142,16 @@ inline Mat6d inverse_of(const Eigen::PartialPivLU<Mat6d>& lu) {
 }
 
 // The joint frames {R_1,i}..{R_6,i} of a U-P-S limb at its reference
-// configuration (every angle zero, the leg straight from the U centre A1 to the
-// S centre A6; docs/hybrid-error-model.md): U axes t and u × t at A1, P along
-// u, S axes t, u × t, u at A6, t = u × z0 horizontal. The limb ends at {R_6,i}.
+// configuration, and the nominal limb closed on a target in closed form:
+// core's (core/hybrid_exact.hpp), which the controller's exact IK uses too.
 inline std::array<Pose<double>, 6> ups_reference_frames(const Vec3d& A1, const Vec3d& A6) {
-  const Vec3d u = (A6 - A1).normalized();
-  Vec3d t = u.cross(Vec3d::UnitZ());
-  if (t.norm() < 1e-6) t = Vec3d::UnitX();  // a vertical leg: any horizontal axis
-  t.normalize();
-  const Vec3d n = u.cross(t);
-  return {
-      make_pose(columns(u, t.cross(u), t), A1),  // {R_1,i}: z = t, x = u
-      make_pose(columns(t, -u, n), A1),          // {R_2,i}: z = u × t, x = t
-      make_pose(columns(n, -t, u), A1),          // {R_3,i}: z = u (P), x = u × t
-      make_pose(columns(u, t.cross(u), t), A6),  // {R_4,i}: z = t, x = u
-      make_pose(columns(t, -u, n), A6),          // {R_5,i}: z = u × t, x = t
-      make_pose(columns(t, n, u), A6),           // {R_6,i}: z = u, x = t
-  };
+  std::array<Pose<double>, 6> frames;
+  kincal::ups_reference_frames(A1, A6, frames.data());
+  return frames;
 }
 
-// The nominal U-P-S limb of ups_reference_frames closed on `target` in closed
-// form. In product-of-exponentials form about the reference axes E = [t, u × t,
-// u] (the reference end frame's axes, through A1 for the U, A6 for the S), the
-// end frame is R = E·Rx(x0)·Ry(x1)·Rx(x3)·Ry(x4)·Rz(x5) and the S centre A1 +
-// x2·E·Rx(x0)·Ry(x1)·e_z: the leg direction gives the U angles and the length,
-// the rest of the rotation the S angles (XYZ Euler angles), each on the branch
-// through the reference configuration. False for a target on the U centre.
 inline bool nominal_ups_joints(const Vec3d& A1, const Mat3d& E, const Pose<double>& target, Vec6d& x) {
-  Vec3d v = E.transpose() * (target.p - A1);
-  const double length = v.norm();
-  if (!(length > 0)) return false;
-  v /= length;
-  x(0) = std::atan2(-v(1), v(2));
-  x(1) = std::asin(std::clamp(v(0), -1.0, 1.0));
-  x(2) = length;
-  const Mat3d S = rot_y(-x(1)) * rot_x(-x(0)) * E.transpose() * target.R;  // Rx(x3)·Ry(x4)·Rz(x5)
-  x(3) = std::atan2(-S(1, 2), S(2, 2));
-  x(4) = std::asin(std::clamp(S(0, 2), -1.0, 1.0));
-  x(5) = std::atan2(-S(0, 1), S(0, 0));
-  return true;
+  return kincal::nominal_ups_joints(A1, E, target, x.data());
 }
 
 // A nominal U-P-S limb closed on `target`: the closed form above, checked by

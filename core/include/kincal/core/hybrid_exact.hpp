@@ -40,7 +40,7 @@
 namespace kincal {
 
 // One chain of N joints: T_end = T_parent · base · Π_j (link[j] · M_j(x_j)) ·
-// end. Nominal (hybrid_nominal_chains) or with Δχ folded into base, links
+// end. Nominal (hybrid_exact_chains with no errors) or with Δχ folded into base, links
 // and end.
 template <class Scalar, int N> struct HybridChainLinks {
   static constexpr int kJoints = N;
@@ -381,12 +381,6 @@ Status hybrid_exact_chains(const HybridGeometry<S>& g, S up_split, const S* sour
   out.joint_offset = exact_joint_offset(g, chi, encoder_offsets);
   out.up_split = up_split;
   return Status::Ok;
-}
-
-template <class S> HybridChains<S> hybrid_nominal_chains(const HybridGeometry<S>& g, S up_split) {
-  HybridChains<S> c;
-  hybrid_exact_chains<S>(g, up_split, nullptr, c);
-  return c;
 }
 
 // Stopping rules of the exact solvers: a chain is closed when its end is
