@@ -804,25 +804,3 @@ TEST(coreCompensation, PortableCheck) {
   portable_compensation<float>();
 }
 
-// The hybrid's twist fixed point (compensation.hpp prepare()): its stop rule
-// on hand-picked changes, both scalars. Done below the tolerance, or when the
-// next change — contracted by the ratio just seen — would be below it;
-// Diverged when a later change grows above rounding; else Continue.
-template <class S> void twist_step_cases() {
-  const S tol = TwistIterationTolerance<S>::value;
-  EXPECT_EQ(twist_iteration_step<S>(tol / 2, S(1), 1), TwistStep::Done);
-  // 10 mm twist, 0.06 mm change: the next would be ~3.6e-4 mm, above tol.
-  EXPECT_EQ(twist_iteration_step<S>(S(0.06), S(10), 1), TwistStep::Continue);
-  // 50 um twist, 2e-5 mm change: the next ~8e-9 mm, so stop now.
-  EXPECT_EQ(twist_iteration_step<S>(S(2e-5) + tol, S(0.05), 1), TwistStep::Done);
-  // A change that grows after the second evaluation: the fixed point fails.
-  EXPECT_EQ(twist_iteration_step<S>(S(0.5), S(0.1), 2), TwistStep::Diverged);
-  // Growth at rounding level is not divergence.
-  EXPECT_NE(twist_iteration_step<S>(S(5) * tol, S(2) * tol, 2), TwistStep::Diverged);
-  // The first change may exceed the twist (a steep model): judged, not failed.
-  EXPECT_EQ(twist_iteration_step<S>(S(0.2), S(0.1), 1), TwistStep::Continue);
-}
-TEST(coreCompensation, TwistFixedPointStopRule) {
-  twist_step_cases<double>();
-  twist_step_cases<float>();
-}

@@ -277,9 +277,11 @@ TEST(identifyHybridCalibration, SweepSelectionToleranceAndScaling) {
   EXPECT_GT(rounding.max_chi_ols, 50.0);
   EXPECT_LT(by_default.max_chi_ols, 10.0);
   EXPECT_GT(rounding.ols_mean, 10 * by_default.ols_mean);
-  // At the default Liu wins over OLS; at 1e-2 H is well enough conditioned
-  // that OLS is at least as good (Liu's bias costs).
-  EXPECT_LT(by_default.liu_mean, 0.8 * by_default.ols_mean);
+  // At the default OLS and Liu compensate alike with the exact model (issue
+  // #31: first-order, Liu won 4.9 against 9.0 µm — its shrinkage hid the
+  // linearisation's error at OLS's larger values); at 1e-2 H is well enough
+  // conditioned that OLS is at least as good (Liu's bias costs).
+  EXPECT_NEAR(by_default.liu_mean, by_default.ols_mean, 0.2 * by_default.ols_mean);
   EXPECT_LE(widest.ols_mean, widest.liu_mean);
   // Scaling the columns cannot change the OLS fit, only Liu's shrinkage.
   EXPECT_EQ(scaled.kept, by_default.kept);

@@ -19,9 +19,11 @@
 //   3. thermal: the pose is pre-scaled about the base origin by 1/(1 + ε),
 //      ε = c·(T − T0) (core/effects.hpp);
 //   4. geometry:
-//        hybrid (seed 000 Eq. (16)): $_t = B(pose)·Δχ̂ (hybrid_error_twist.hpp,
-//          at the nominal configuration), corrected pose = apply_twist(pose, −$_t),
-//          q* = ideal IK of the corrected pose with the encoder offsets ξ̂;
+//        hybrid: q* = the exact IK of the identified machine (hybrid_exact.hpp:
+//          the chains with ξ̂ and Δχ̂ folded, a serial Newton for the UP limb
+//          and the wrist, a closure per UPS limb; issue #31 — seed 000 Eq.
+//          (16)'s first-order twist left micrometres at 1 mm errors); with
+//          Δχ̂ = 0, the ideal IK with the encoder offsets ξ̂ (Fig. 4);
 //        6-UPS (seed 001): q* = IK of the calibrated geometry;
 //   5. joint-space effects (scale, backlash, compliance, cyclic): the command q
 //      with q + Δq(q) = q* (effect_correct_joints); the backlash direction of
@@ -44,7 +46,7 @@
 #include "kincal/core/compensation_status.hpp"
 #include "kincal/core/effects.hpp"
 #include "kincal/core/hybrid.hpp"
-#include "kincal/core/hybrid_error_twist.hpp"
+#include "kincal/core/hybrid_exact.hpp"
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/core/stewart.hpp"
 
@@ -106,36 +108,6 @@ template <> struct StillTolerance<float> {
 
 // |RᵀR − I| allowed in an NC pose: rounding of a rotation built in the
 // scalar (a matrix ×1.001 is not a rotation and is refused).
-// The hybrid's error-twist fixed point (prepare()) stops when an iterate
-// changes the twist by at most this (mm, rad): 10 nm / 10 nrad in double, far
-// below a tracker's noise; in float about the rounding of a 1 m pose.
-template <class Scalar> struct TwistIterationTolerance;
-template <> struct TwistIterationTolerance<double> {
-  static constexpr double value = 1e-5;
-};
-template <> struct TwistIterationTolerance<float> {
-  static constexpr float value = 2e-4f;
-};
-// At most this many evaluations of the error twist per NC point (Eq. (16) is
-// the first). The contraction factor is ~|∂$_t/∂p| (~1e-2 for twists of
-// 10 mm over the task cuboid), so three leave ~1e-4 of the first iterate's error.
-inline constexpr int kHybridTwistIterations = 3;
-
-// One step of that fixed point judged: `change` is |$_t(p_k) − $_t(p_{k−1})|∞,
-// `previous` the change before it (for k = 1, |$_t(p_0)|∞: the displacement
-// that caused it). Done when the change is below the tolerance, or when the
-// next one, contracted by the ratio just seen, would be (so a model whose
-// twist hardly varies stops after two evaluations); Diverged when a later
-// change grows above rounding (the fixed point does not hold for the model).
-enum class TwistStep : std::uint8_t { Continue, Done, Diverged };
-template <class Scalar> constexpr TwistStep twist_iteration_step(Scalar change, Scalar previous, int k) {
-  const Scalar tol = TwistIterationTolerance<Scalar>::value;
-  if (change <= tol) return TwistStep::Done;
-  if (k > 1 && change > previous && change > Scalar(10) * tol) return TwistStep::Diverged;
-  if (previous > Scalar(0) && change * (change / previous) <= tol) return TwistStep::Done;
-  return TwistStep::Continue;
-}
-
 template <class Scalar> struct RotationTolerance;
 template <> struct RotationTolerance<double> {
   static constexpr double value = 1e-9;
@@ -153,27 +125,6 @@ template <class Scalar> bool orthonormal(const Mat3<Scalar>& R) {
   return true;
 }
 
-// exp([ω]×) (Rodrigues, as exp_so3 of core/pose.hpp) for the small rotation
-// of a predicted pose error, without libm: sin θ/θ and (1 − cos θ)/θ² by their
-// series to θ⁸, exact to rounding for θ ≤ 0.1 rad (the next terms are below
-// 3e-18). This keeps sin/cos and their large-argument reduction (0.7 KiB of
-// Cortex-M stack, 2.4 KiB of flash) off the compensation's deepest path.
-// false for θ > 0.1 rad (5.7°): no calibration error is that large.
-template <class Scalar> bool small_rotation(const Vec3<Scalar>& w, Mat3<Scalar>& R) {
-  const Scalar t = w.squaredNorm();
-  if (!(t <= Scalar(0.01))) return false;
-  const Scalar one(1);
-  const Scalar a = one - t / Scalar(6) * (one - t / Scalar(20) * (one - t / Scalar(42) * (one - t / Scalar(72))));
-  const Scalar b =
-      Scalar(0.5) * (one - t / Scalar(12) * (one - t / Scalar(30) * (one - t / Scalar(56) * (one - t / Scalar(90)))));
-  const Mat3<Scalar> W = skew(w);
-  R.noalias() = W * W;  // R = I + a·W + b·W², one term per statement (stack at -Os)
-  R *= b;
-  R += a * W;
-  R.diagonal().array() += one;
-  return true;
-}
-
 namespace compensation_detail {
 
 // The machine-specific half: the controller's copies of the table's geometry.
@@ -182,26 +133,26 @@ template <class Machine> struct Model;
 template <class S> struct Model<StewartMachine<S>> {
   StewartGeometry<S> nominal;
   StewartGeometry<S> calibrated;
-  void load(const StewartMachine<S>& m) {
+  bool load(const StewartMachine<S>& m) {
     nominal = to_core(m.nominal);
     calibrated = to_core(m.calibrated);
+    return true;
   }
 };
 
 template <class S> struct Model<HybridMachine<S>> {
-  HybridGeometry<S> nominal;     // B is evaluated on it; q_nom
-  HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK of Eq. (16)
-  const S* source_errors = nullptr;  // Δχ̂, read in place from the table
-  HybridErrorReference<S> reference;  // constants of the error frames
-  bool structural = false;  // any Δχ̂ ≠ 0
-  void load(const HybridMachine<S>& m) {
+  HybridGeometry<S> nominal;     // q_nom, the singularity test; the exact IK's start
+  HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK when Δχ̂ = 0
+  HybridChains<S> chains;        // the identified machine: ξ̂ and Δχ̂ folded (hybrid_exact.hpp)
+  bool structural = false;       // any Δχ̂ ≠ 0: the exact IK of `chains`
+  bool load(const HybridMachine<S>& m) {
     nominal = to_core(m.nominal);
     controller = nominal;
     for (int i = 0; i < 6; ++i) controller.joint_offset(i) += m.encoder_offsets[i];
-    source_errors = m.source_errors;
-    reference = hybrid_error_reference(nominal, m.up_split);
     structural = false;
     for (int k = 0; k < kHybridSourceErrorCount; ++k) structural = structural || m.source_errors[k] != S(0);
+    return !structural ||
+           hybrid_exact_chains(nominal, m.up_split, m.source_errors, chains, m.encoder_offsets) == Status::Ok;
   }
 };
 
@@ -247,7 +198,10 @@ template <class Machine> class Compensator {
   Compensator(const Table& table, const MachineLimits<Scalar>& limits)
       : table_(&table), status_(validate_table(table, limits)) {
     if (status_ != CompensationStatus::Ok) return;
-    model_.load(table.machine);
+    if (!model_.load(table.machine)) {
+      status_ = CompensationStatus::TableValues;
+      return;
+    }
     effects_ = to_core(table.effects);
 #if !KINCAL_CORE_USER_EFFECT
     // User numbers without the code to use them: refuse rather than drop
@@ -409,13 +363,15 @@ template <class Machine> class Compensator {
     if constexpr (family == MachineFamily::Stewart6Ups) {
       return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));  // seed 001
     } else {
-      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));  // seed 000 Fig. 4: ideal IK + ξ̂
+      // The identified machine's exact IK (issue #31); with no structural
+      // error it is seed 000 Fig. 4's ideal IK with ξ̂.
+      if (model_.structural) return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal));
+      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));
     }
   }
 
   // At the nominal configuration of `pose`: q_nom, the singularity test, the
-  // static load; then the pose handed to the IK (thermal pre-scaling, and for
-  // the hybrid the predicted error twist removed, seed 000 Eq. (16)).
+  // static load; then the pose handed to the IK (thermal pre-scaling).
   KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                                              Vec6<Scalar>& load, Pose<Scalar>& target) const {
     using CS = CompensationStatus;
@@ -443,46 +399,6 @@ template <class Machine> class Compensator {
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
       target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
-      if (model_.structural) {
-        // seed 000 Eq. (16): the predicted error twist at the nominal
-        // configuration, removed from the requested pose before the ideal IK.
-        // The identified model puts the twist at the pose p the ideal machine
-        // (encoder offsets in its geometry) reaches, reached = apply_twist(p,
-        // $_t(p)), so the pose to command is the fixed point
-        // p = apply_twist(target, −$_t(p)); Eq. (16) is its first iterate,
-        // from p = target. Each further iterate shrinks the error by the
-        // relative change of $_t over the twist's displacement
-        // (docs/compensation.md). Frames, wrenches and twist are re-evaluated
-        // in the same locals; the loop's own (the pose it starts from, the
-        // previous twist) add 160 B to this frame (M7 example: 3 184 B worst
-        // case, bar 4 096 B).
-        const Pose<Scalar> base = target;
-        Twist<Scalar> previous = Twist<Scalar>::Zero();
-        Scalar previous_change = Scalar(0);
-        for (int k = 0; k < kHybridTwistIterations; ++k) {
-          if (k > 0) {
-            s = hybrid_frames_at_pose(model_.nominal, target, f, angles);
-            if (s == Status::Ok) s = hybrid_wrenches(model_.nominal, f, w);
-            if (s != Status::Ok) return to_compensation_status(s);
-          }
-          Twist<Scalar> t;
-          s = hybrid_error_twist(model_.nominal, model_.reference, f, w, model_.source_errors, t);
-          if (s != Status::Ok) return to_compensation_status(s);
-          // apply_twist(base, −$_t), its rotation by a libm-free series.
-          Mat3<Scalar> dR;
-          if (!small_rotation(Vec3<Scalar>(-t.template tail<3>()), dR)) return CS::OversizedCorrection;
-          target.p = base.p - t.template head<3>();
-          target.R = dR * base.R;
-          const Scalar change = (k == 0 ? t : Twist<Scalar>(t - previous)).cwiseAbs().maxCoeff();
-          if (k > 0) {
-            const TwistStep step = twist_iteration_step(change, previous_change, k);
-            if (step == TwistStep::Done) break;
-            if (step == TwistStep::Diverged) return CS::NotConverged;
-          }
-          previous = t;
-          previous_change = change;
-        }
-      }
       return CS::Ok;
     }
   }

@@ -42,8 +42,7 @@ using MachineLimitsf = MachineLimits<float>;
 // Sane maxima that no calibration of a machine of these sizes needs: 10 mm of
 // geometric error (seed 001 Table 3 and seed 000 Table 3 are < 1 mm; a
 // machine before its first calibration a few mm), 0.1 rad of angular error
-// (seed 000 Table 3 is < 1 mrad; the compensation's small_rotation refuses
-// a predicted error twist above 0.1 rad anyway), scale 1 % (a leadscrew is
+// (seed 000 Table 3 is < 1 mrad), scale 1 % (a leadscrew is
 // off by 1e-4), thermal 1e-3 /°C (steel 1.2e-5, aluminium 2.3e-5). A robot
 // description may set each (identify's machine_limits: the keys
 // max_geometry_error, max_angle_error, max_scale, max_thermal).

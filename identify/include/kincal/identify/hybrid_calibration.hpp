@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "kincal/core/hybrid.hpp"
+#include "kincal/core/hybrid_exact.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
 #include "kincal/identify/csv.hpp"
@@ -98,17 +99,28 @@ struct HybridCoarseIteration {
   double rms_residual = 0;                       // RMS of the gauge residual before the round, mm
 };
 
-// What the controller needs to compensate (seed 000 Eq. (16) and Fig. 4):
-// the ideal IK with the encoder offsets in the geometry, and the predicted
-// pose error twist $_t = B·Δη̂ of the structural errors.
+// The identified machine, as the controller compensates it: the nominal
+// chains with the encoder offsets ξ̂ (seed 000 Eq. (15)) and the structural
+// source errors Δχ̂ folded into their links — the erroneous machine itself
+// (core/hybrid_exact.hpp; issue #31), not seed 000's first-order image of it
+// (Eq. (16)'s $_t = B·Δη̂, which left 1.1 µm on a machine with 1 mm / 2 mrad
+// errors). B stays the fit's Jacobian.
 struct HybridCompensation {
   HybridGeometry<double> nominal;                       // the nominal machine (its own joint_offset included)
-  Vec6<double> encoder_offsets = Vec6<double>::Zero();  // ξ̂: added to nominal.joint_offset in the IK
-  Eigen::VectorXd structural;                           // Δχ̂ (150; encoder entries 0) or empty: none
+  Vec6<double> encoder_offsets = Vec6<double>::Zero();  // ξ̂: added to nominal.joint_offset
+  Eigen::VectorXd structural;                           // Δχ̂ (156; encoder entries 0) or empty: none
   std::shared_ptr<const HybridErrorModel> model;        // B of the nominal machine
-  // The controller's geometry: nominal with joint_offset += encoder_offsets.
+  // The ideal machine's geometry: nominal with joint_offset += encoder_offsets.
   HybridGeometry<double> controller_geometry() const;
+  // The identified machine's chains (ξ̂ and Δχ̂ folded). InputError if the
+  // values are not finite.
+  HybridChains<double> chains() const;
 };
+
+// The identified machine's tool pose for commands q: core's exact FK of
+// `chains` from `guess` (the passive it reached is written back on Ok).
+Status predict_hybrid(const HybridGeometry<double>& nominal, const HybridChains<double>& chains,
+                      const Vec6<double>& q, HybridPassive<double>& guess, Pose<double>& tool);
 
 struct HybridCalibration {
   HybridGeometry<double> nominal;
@@ -183,9 +195,9 @@ using HybridOutlierSearch = OutlierSearch<HybridCalibration>;
 HybridOutlierSearch hybrid_outlier_search(const Robot& nominal, const PoseTable& data, const HybridCalibration& all,
                                           const HybridCalibrationOptions& options = {});
 
-// Eq. (16): $_t = B(requested)·Δχ̂, corrected = apply_twist(requested, −$_t),
-// q = ideal IK of the corrected pose on controller_geometry(). Returns the IK
-// (or B) status; q is written only on Ok.
+// The commands that put the identified machine's tool on `requested`: core's
+// exact IK of its chains (hybrid_exact_ik), the same routine as the
+// controller's Compensator. Returns its status; q is written only on Ok.
 Status compensate_hybrid(const HybridCompensation& compensation, const Pose<double>& requested, Vec6<double>& q);
 Status compensate_hybrid(const HybridCalibration& calibration, const Pose<double>& requested, Vec6<double>& q);
 

@@ -8,8 +8,10 @@
 
 #include "estimate/least_squares_step.hpp"
 #include "families/hybrid/hybrid_family.hpp"
+#include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/gauge.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
+#include "kincal/identify/input_error.hpp"
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/simulate.hpp"
 
@@ -65,6 +67,20 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
   twist_reference_ = hybrid_error_reference(comp_.nominal, HybridErrorModelOptions().up_split);
 }
 
+// Whether every identified value lies within the machine's limits
+// (machine_limits: the robot description's max_correction,
+// max_geometry_error and max_angle_error), i.e. a table the controller accepts.
+bool HybridBaseFit::within_limits(const HybridCompensation& c) const {
+  const MachineLimits<double> l = machine_limits(*robot_);
+  for (int i = 0; i < HybridErrorModel::kEncoderCount; ++i)
+    if (!(std::abs(c.encoder_offsets(i)) <= l.max_correction[i])) return false;
+  for (Index k = HybridErrorModel::kEncoderCount; k < c.structural.size(); ++k)
+    if (!(std::abs(c.structural(k)) <=
+          (HybridErrorLayout::angular(int(k)) ? l.max_angle_error : l.max_geometry_error)))
+      return false;
+  return true;
+}
+
 void HybridBaseFit::start(const PoseTable& data, bool own_estimate, bool current) {
   std::vector<HybridCompensation> states;
   if (own_estimate) states.push_back(seed_estimate_);
@@ -72,14 +88,27 @@ void HybridBaseFit::start(const PoseTable& data, bool own_estimate, bool current
   comp_ = seed_estimate_;
   step(reference_ - values());
   states.push_back(comp_);  // the coarse machine
+  // A start within the machine's limits first: where an effect lies nearly
+  // in the span of the base's ill-conditioned combinations, the data fit as
+  // well at a machine millimetres away (UPS-actuator scale ±5e-4: encoder
+  // offset 24 mm, an S centre 26 mm off, 5.3 µm RMS at 5 µm noise) — a
+  // model the controller refuses. The exact model fits it as well as the
+  // true one; only the limits tell them apart. (Before the exact model the
+  // first-order twist's error at such values made the far start fit worse.)
   std::size_t best = 0, best_nodes = 0;
+  bool best_within = false;
   double best_objective = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < states.size(); ++i) {
     comp_ = states[i];
+    const bool within = within_limits(comp_);
     std::size_t nodes_here = 0;
     const double objective_here = trial_objective(data, nodes_here);
-    if (nodes_here > best_nodes || (nodes_here == best_nodes && objective_here < best_objective)) {
+    const bool better = within != best_within ? within
+                        : nodes_here != best_nodes ? nodes_here > best_nodes
+                                                   : objective_here < best_objective;
+    if (i == 0 || better) {
       best = i;
+      best_within = within;
       best_nodes = nodes_here;
       best_objective = objective_here;
     }
@@ -129,6 +158,18 @@ bool HybridBaseFit::ideal_pose(const PoseTable& data, std::size_t k, const Hybri
   return hybrid_fk(controller, joints_of(row, *en), guess, pose).status == Status::Ok;
 }
 
+bool HybridBaseFit::modelled_pose(const PoseTable& data, std::size_t k, const HybridChains<double>& chains,
+                                  Pose<double>& pose) const {
+  const PoseRow& row = data.rows[k];
+  const std::optional<EffectNode>& en = (*en_)[k];
+  if (!row.targets || !usable_row(row) || !en) return false;
+  const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+  HybridPassive<double> guess = g0_.home;
+  Vec6<double> q_ik;
+  if (hybrid_ik(g0_, commanded, q_ik, nullptr, &guess) != Status::Ok) return false;
+  return predict_hybrid(g0_, chains, joints_of(row, *en), guess, pose) == Status::Ok;
+}
+
 bool HybridBaseFit::structural_twist(const Pose<double>& pose, Twist<double>& t) const {
   // Δη has zeros at the encoder entries, so the twist is structural only.
   HybridFrames<double> f;
@@ -151,21 +192,18 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
   base.parameters = p_;
   MatrixXd B(6, HybridErrorModel::kParameterCount), B_kept(6, p_);
   const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
+  const HybridChains<double> chains = comp_.chains();
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
-    Pose<double> predicted;
-    if (!ideal_pose(data, k, gc, predicted)) continue;
-    // The structural twist at the pose the ideal machine reaches, joint
-    // effects included (as the fine stage puts it and core's fixed point
-    // p = apply_twist(target, −$_t(p)) inverts). Not at the commanded pose:
-    // where the estimate's ill-conditioned combinations are large, the
-    // twist changes fast with the point it is evaluated at, and a model and
-    // a compensation that evaluate it at different points disagree by
-    // micrometres (clean hybrid data: 15.6 µm compensated; 2.24 µm here).
+    // The identified machine's pose (its exact FK, joint effects included:
+    // the pose the compensator's exact IK inverts); B, the fit's Jacobian,
+    // at that pose.
+    Pose<double> predicted, ideal;
+    if (!modelled_pose(data, k, chains, predicted)) continue;
     if (comp_.model->error_jacobian(predicted, B) != Status::Ok) continue;
-    // with_joint_map: also the joint map per node, for the effect columns.
-    const Eigen::Matrix<double, 6, 6> joint_map =
-        with_joint_map ? joint_map_at(predicted) : Eigen::Matrix<double, 6, 6>::Identity();
-    predicted = apply_twist(predicted, Twist<double>(B * comp_.structural));
+    // with_joint_map: also the joint map per node, for the effect columns
+    // (first order: the twist's change over the ideal machine's pose).
+    Eigen::Matrix<double, 6, 6> joint_map = Eigen::Matrix<double, 6, 6>::Identity();
+    if (with_joint_map && ideal_pose(data, k, gc, ideal)) joint_map = joint_map_at(ideal);
     const PoseRow& row = data.rows[k];
     NodeData n;
     n.row = k;
@@ -209,15 +247,19 @@ void HybridBaseFit::add_joint_maps(const PoseTable& data, BaseModel& base) const
 }
 
 double HybridBaseFit::trial_objective(const PoseTable& data, std::size_t& nodes) const {
-  const HybridGeometry<double> gc = without_limits(comp_.controller_geometry());
   double o = penalty_ * (values() - reference_).squaredNorm();
   nodes = 0;
+  HybridChains<double> chains;
+  try {
+    chains = comp_.chains();
+  } catch (const InputError&) {  // a trial step to non-finite values models nothing
+    return o;
+  }
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
     Pose<double> predicted;
-    Twist<double> t;
-    if (!ideal_pose(data, k, gc, predicted) || !structural_twist(predicted, t)) continue;
+    if (!modelled_pose(data, k, chains, predicted)) continue;
     ++nodes;
-    if (data.rows[k].role != Role::Test) o += gauge_residual(data.rows[k], apply_twist(predicted, t)).squaredNorm();
+    if (data.rows[k].role != Role::Test) o += gauge_residual(data.rows[k], predicted).squaredNorm();
   }
   return o;
 }

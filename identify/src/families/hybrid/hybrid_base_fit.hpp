@@ -51,17 +51,22 @@ class HybridBaseFit final : public SteppedBaseFit {
   BaseModel evaluate(const PoseTable& data, bool with_joint_map) const override;
   void add_joint_maps(const PoseTable& data, BaseModel& base) const override;
   // RSS of the cal rows plus the ridge penalty k·‖χ − χ_coarse‖², the
-  // structural twist by core's evaluation (no 6 × 150 B; equal to B·Δη to
-  // rounding).
+  // rows predicted by the identified machine's exact FK.
   double trial_objective(const PoseTable& data, std::size_t& nodes) const override;
   // Description, model (the current χ), ridge_k and column_away of `base`.
   void finish(BaseModel& base, const std::string& data_file, int steps) const override;
 
  private:
+  // Every value of `c` within the robot's limits (a table the controller accepts).
+  bool within_limits(const HybridCompensation& c) const;
   // Row k's pose on the ideal machine with the current encoder offsets (the
   // pose the structural twist is evaluated at); false where IK or FK fails.
   bool ideal_pose(const PoseTable& data, std::size_t k, const HybridGeometry<double>& controller,
                   Pose<double>& pose) const;
+  // Row k's pose on the identified machine (its exact chains, `chains`);
+  // false where IK or FK fails.
+  bool modelled_pose(const PoseTable& data, std::size_t k, const HybridChains<double>& chains,
+                     Pose<double>& pose) const;
   // The structural twist B(p)·Δη at `pose` by core's evaluation.
   bool structural_twist(const Pose<double>& pose, Twist<double>& t) const;
   // I + ∂$_t/∂p at `pose` (NodeData::joint_map); identity where a twist fails.

@@ -104,6 +104,25 @@ HybridGeometry<double> HybridCompensation::controller_geometry() const {
   return g;
 }
 
+HybridChains<double> HybridCompensation::chains() const {
+  Eigen::VectorXd chi = Eigen::VectorXd::Zero(HybridErrorLayout::size());
+  if (structural.size() == chi.size()) chi = structural;
+  chi.head<6>() = encoder_offsets;
+  const double up_split = model ? model->options().up_split : HybridErrorModelOptions().up_split;
+  HybridChains<double> c;
+  if (hybrid_exact_chains(nominal, up_split, chi.data(), c) != Status::Ok)
+    throw InputError("the hybrid model's source errors are not all finite");
+  return c;
+}
+
+Status predict_hybrid(const HybridGeometry<double>& nominal, const HybridChains<double>& chains,
+                      const Vec6<double>& q, HybridPassive<double>& guess, Pose<double>& tool) {
+  HybridPassive<double> reached;
+  const Status st = hybrid_exact_fk(nominal, chains, q, guess, tool, &reached).status;
+  if (st == Status::Ok) guess = reached;
+  return st;
+}
+
 namespace {
 
 // The EstimatorOptions of a fine estimator under the calibration's options.
@@ -396,19 +415,24 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     }
   }
   auto model_residual = [&](const VectorXd& chi, VectorXd& res, MatrixXd* Hfull) {
-    HybridGeometry<double> g = g0;
-    g.joint_offset = g0.joint_offset + out.coarse_xi + chi.head<6>();
-    VectorXd eta = chi;
-    eta.head<6>().setZero();
+    HybridCompensation machine;
+    machine.nominal = g0;
+    machine.encoder_offsets = out.coarse_xi + chi.head<6>();
+    machine.structural = chi;
+    machine.structural.head<6>().setZero();
+    if (!machine.structural.allFinite() || !machine.encoder_offsets.allFinite()) return false;
+    const HybridChains<double> chains = machine.chains();
     res.resize(9 * N);
     for (Index k = 0; k < N; ++k) {
       const Node& n = nodes[static_cast<std::size_t>(k)];
-      Pose<double> tool;
-      if (hybrid_fk(g, n.q, n.guess, tool).status != Status::Ok) return false;
-      if (model.error_jacobian(tool, B) != Status::Ok) return false;
-      const Pose<double> reached = apply_twist(tool, Twist<double>(B * eta));
+      Pose<double> reached;
+      HybridPassive<double> guess = n.guess;
+      if (predict_hybrid(g0, chains, n.q, guess, reached) != Status::Ok) return false;
       res.segment<9>(9 * k) = n.measured - targets9(g0, radius, reached);
-      if (Hfull) Hfull->middleRows(9 * k, 9).noalias() = gauge_map(g0, radius, reached) * B;
+      if (Hfull) {
+        if (model.error_jacobian(reached, B) != Status::Ok) return false;
+        Hfull->middleRows(9 * k, 9).noalias() = gauge_map(g0, radius, reached) * B;
+      }
     }
     return res.allFinite();
   };
@@ -570,33 +594,9 @@ IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const Hybr
 
 Status compensate_hybrid(const HybridCompensation& c, const Pose<double>& requested, Vec6<double>& q) {
   if (!requested.finite()) return Status::InvalidInput;
-  Pose<double> corrected = requested;
-  if (c.structural.size() > 0 && c.structural.lpNorm<Eigen::Infinity>() > 0) {
-    if (!c.model || c.structural.size() != c.model->size()) return Status::InvalidInput;
-    // Eq. (16): $_t = B(requested)·Δχ̂ removed from the requested pose, then
-    // the fixed point p = apply_twist(requested, −B(p)·Δχ̂) of the model's
-    // twist at the pose the ideal machine reaches: the same iterates and
-    // stop rule as core's Compensator (compensation.hpp prepare()).
-    Eigen::MatrixXd B;
-    Twist<double> previous = Twist<double>::Zero();
-    double previous_change = 0;
-    for (int k = 0; k < kHybridTwistIterations; ++k) {
-      const Status st = c.model->error_jacobian(corrected, B);
-      if (st != Status::Ok) return st;
-      const Twist<double> t = B * c.structural;
-      corrected = apply_twist(requested, Twist<double>(-t));
-      const double change = (k == 0 ? t : Twist<double>(t - previous)).lpNorm<Eigen::Infinity>();
-      if (k > 0) {
-        const TwistStep step = twist_iteration_step(change, previous_change, k);
-        if (step == TwistStep::Done) break;
-        if (step == TwistStep::Diverged) return Status::NotConverged;
-      }
-      previous = t;
-      previous_change = change;
-    }
-  }
+  if (c.structural.size() > 0 && c.structural.size() != HybridErrorLayout::size()) return Status::InvalidInput;
   Vec6<double> out;
-  const Status st = hybrid_ik(c.controller_geometry(), corrected, out);
+  const Status st = hybrid_exact_ik(c.nominal, c.chains(), requested, out);
   if (st == Status::Ok) q = out;
   return st;
 }
@@ -768,9 +768,9 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
   if (!nominal.is_hybrid()) throw InputError("hybrid_residuals needs a hybrid robot");
   // Residuals of measured rows: no joint limits (joint_limits.hpp).
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
-  const HybridGeometry<double> g = compensation != nullptr ? without_limits(compensation->controller_geometry()) : g0;
-  const bool structural = compensation != nullptr && compensation->structural.size() > 0;
-  MatrixXd B(6, HybridErrorModel::kParameterCount);
+  // The identified machine (its exact chains; the nominal one without a model).
+  const HybridChains<double> chains =
+      compensation != nullptr ? compensation->chains() : hybrid_nominal_chains(g0, HybridErrorModelOptions().up_split);
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;
   std::vector<UnevaluatedRow> unevaluated;
@@ -790,18 +790,9 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
       continue;
     }
     Pose<double> predicted;
-    if (const Status fk = hybrid_fk(g, q, guess, predicted).status; fk != Status::Ok) {
+    if (const Status fk = predict_hybrid(g0, chains, q, guess, predicted); fk != Status::Ok) {
       unevaluated.push_back({row.id, row.line, "FK of the model failed (" + std::string(to_string(fk)) + ")"});
       continue;
-    }
-    if (structural) {
-      // The model's twist at the pose the ideal machine reaches (as the fine
-      // stage and the compensation's fixed point put it).
-      if (const Status st = compensation->model->error_jacobian(predicted, B); st != Status::Ok) {
-        unevaluated.push_back({row.id, row.line, "the model's error twist failed (" + std::string(to_string(st)) + ")"});
-        continue;
-      }
-      predicted = apply_twist(predicted, Twist<double>(B * compensation->structural));
     }
     Eigen::Matrix<double, 9, 1> measured;
     for (int k = 0; k < 9; ++k) measured(k) = row.targets->data()[k];

@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "kincal/core/hybrid.hpp"
+#include "kincal/identify/hybrid_calibration.hpp"
 #include "kincal/identify/hybrid_error_model.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -15,17 +16,16 @@ namespace kincal::identify {
 namespace detail {
 namespace {
 
-// seed 000's 150 source errors as the controller applies them (seed 000
-// Eq. (16), HybridCompensation): the ideal FK with the encoder offsets in the
-// joints, then the structural twist B(p)·Δη at the pose p it reaches (as the
-// gauge's base fit, base_fit.cpp). Fitting the exact FK instead and
-// compensating by this first-order model left held-out targets 39 µm off
-// where the floor was 2.3 µm (0.3 mm / 0.3 mrad errors): the fit's large
-// ill-conditioned combinations are where the two models part. The
-// convention is seed 000 Section 4.1's column selection with the
-// instrument's columns placed first, so the source errors a registration or
-// a target position absorbs (and those no pose of the data moves) are held
-// at 0.
+// The 156 source errors as the controller applies them: the erroneous
+// machine itself, its chains with Δχ folded (core/hybrid_exact.hpp), whose
+// exact IK the compensator runs — the fit and the compensation share one
+// model (a first-order model here, seed 000 Eq. (16), left 0.1–0.26 µm on
+// held-out poses of an independently simulated machine with 0.1 mm errors
+// and micrometres at 1 mm; issue #31). B at the reached pose is the fit's
+// Jacobian. The convention is seed 000 Section 4.1's column selection with
+// the instrument's columns placed first, so the source errors a
+// registration or a target position absorbs (and those no pose of the data
+// moves) are held at 0.
 class HybridErrors final : public FamilyErrors {
  public:
   explicit HybridErrors(const Robot& robot) : g_(robot.hybrid()), model_(g_) {}
@@ -48,15 +48,17 @@ class HybridErrors final : public FamilyErrors {
     return guess;
   }
   bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const override {
-    HybridGeometry<double> controller = g_;
-    controller.joint_offset += errors.head<HybridErrorModel::kEncoderCount>();
-    Pose<double> ideal;
-    if (hybrid_fk(controller, q, guess.passive, ideal).status != Status::Ok) return false;
-    Eigen::MatrixXd B;
-    if (model_.error_jacobian(ideal, B) != Status::Ok) return false;
-    Eigen::VectorXd structural = errors;
-    structural.head<HybridErrorModel::kEncoderCount>().setZero();
-    pose = apply_twist(ideal, Twist<double>(B * structural));
+    // The chains are rebuilt only when the errors change (once per step of
+    // the fit, not per node).
+    if (cached_errors_.size() != errors.size() || cached_errors_ != errors) {
+      if (errors.size() != HybridErrorModel::kParameterCount ||
+          hybrid_exact_chains(g_, model_.options().up_split, errors.data(), chains_) != Status::Ok) {
+        cached_errors_.resize(0);
+        return false;
+      }
+      cached_errors_ = errors;
+    }
+    if (predict_hybrid(g_, chains_, q, guess.passive, pose) != Status::Ok) return false;
     guess.pose = pose;
     return true;
   }
@@ -148,6 +150,8 @@ class HybridErrors final : public FamilyErrors {
  private:
   HybridGeometry<double> g_;
   HybridErrorModel model_;
+  mutable Eigen::VectorXd cached_errors_;  // the errors chains_ were built from
+  mutable HybridChains<double> chains_;
 };
 
 }  // namespace
