@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "kincal/core/hybrid_exact.hpp"
@@ -171,28 +172,39 @@ TEST(HybridExact, FloatFollowsDouble) {
   }
 }
 
-// The chains' libm-free sin / cos (halving, series, doubling) against libm.
+// core's libm-free sin / cos (core/sin_cos.hpp: reduction, halving, series,
+// doubling) against libm, on joint angles and on angles many turns out.
 TEST(HybridExact, SinCosWithoutLibmMatchesLibm) {
   double worst = 0, worst_far = 0, worst_f = 0;
   for (int k = -20000; k <= 20000; ++k) {
     const double a = 1e-3 * k + 1e-7 * (k % 7);  // -20 … 20 rad, off the grid
     double s = 0, c = 0;
-    ASSERT_TRUE(kincal::hybrid_exact_detail::sin_cos(a, s, c));
+    ASSERT_TRUE(kincal::sin_cos(a, s, c));
     const double gap = std::max(std::abs(s - std::sin(a)), std::abs(c - std::cos(a)));
     (std::abs(a) <= 4.0 ? worst : worst_far) = std::max(std::abs(a) <= 4.0 ? worst : worst_far, gap);
     float sf = 0, cf = 0;
-    ASSERT_TRUE(kincal::hybrid_exact_detail::sin_cos(float(a), sf, cf));
+    ASSERT_TRUE(kincal::sin_cos(float(a), sf, cf));
     worst_f = std::max({worst_f, std::abs(double(sf) - std::sin(double(float(a)))),
                         std::abs(double(cf) - std::cos(double(float(a))))});
   }
-  EXPECT_LT(worst, 1e-14);      // joint angles (|a| ≤ 4 rad): at most five doublings
-  EXPECT_LT(worst_far, 5e-14);  // to 20 rad: eight, about a rounding each
+  double worst_turns = 0;  // many turns out: the reduction to [−π, π]
+  for (int k = 1; k <= 2000; ++k) {
+    const double a = (k % 2 ? 1.0 : -1.0) * (0.5 * k + 1e-3 * (k % 13));
+    double s = 0, c = 0;
+    ASSERT_TRUE(kincal::sin_cos(a, s, c));
+    worst_turns = std::max({worst_turns, std::abs(s - std::sin(a)), std::abs(c - std::cos(a))});
+  }
+  EXPECT_LT(worst, 1e-14);        // joint angles (|a| ≤ 4 rad): at most five doublings
+  EXPECT_LT(worst_far, 2e-14);    // to 20 rad: reduced to [−π, π] first
+  EXPECT_LT(worst_turns, 2e-13);  // to 1000 rad: k·2π's rounding, ~|a|·1e-16
   EXPECT_LT(worst_f, 2e-5);
   double s = 7, c = 7;
-  EXPECT_FALSE(kincal::hybrid_exact_detail::sin_cos(1e5, s, c));
-  EXPECT_FALSE(kincal::hybrid_exact_detail::sin_cos(std::nan(""), s, c));
-  EXPECT_EQ(s, 7.0);
-  EXPECT_EQ(c, 7.0);
+  EXPECT_FALSE(kincal::sin_cos(2e9, s, c));
+  EXPECT_TRUE(std::isnan(s) && std::isnan(c));
+  s = c = 7;
+  EXPECT_FALSE(kincal::sin_cos(std::nan(""), s, c));
+  EXPECT_TRUE(std::isnan(s) && std::isnan(c));
+  EXPECT_FALSE(kincal::sin_cos(std::numeric_limits<double>::infinity(), s, c));
 }
 
 TEST(HybridExact, BadInputIsAStatus) {

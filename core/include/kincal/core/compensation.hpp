@@ -143,16 +143,24 @@ template <class S> struct Model<StewartMachine<S>> {
 template <class S> struct Model<HybridMachine<S>> {
   HybridGeometry<S> nominal;     // q_nom, the singularity test; the exact IK's start
   HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK when Δχ̂ = 0
-  HybridChains<S> chains;        // the identified machine: ξ̂ and Δχ̂ folded (hybrid_exact.hpp)
-  bool structural = false;       // any Δχ̂ ≠ 0: the exact IK of `chains`
+  // The identified machine's numbers, read in place from the table (which
+  // outlives the compensator): the exact IK builds each chain from them
+  // where it needs it (hybrid_exact.hpp; stored, the chains are 3.5 KiB of
+  // doubles a controller's static RAM does not have).
+  const S* source_errors = nullptr;    // Δχ̂
+  const S* encoder_offsets = nullptr;  // ξ̂
+  S up_split = S(345);
+  bool structural = false;  // any Δχ̂ ≠ 0: the exact IK
   bool load(const HybridMachine<S>& m) {
     nominal = to_core(m.nominal);
     controller = nominal;
     for (int i = 0; i < 6; ++i) controller.joint_offset(i) += m.encoder_offsets[i];
+    source_errors = m.source_errors;
+    encoder_offsets = m.encoder_offsets;
+    up_split = m.up_split;
     structural = false;
     for (int k = 0; k < kHybridSourceErrorCount; ++k) structural = structural || m.source_errors[k] != S(0);
-    return !structural ||
-           hybrid_exact_chains(nominal, m.up_split, m.source_errors, chains, m.encoder_offsets) == Status::Ok;
+    return finite_source_errors(m.source_errors, m.encoder_offsets);
   }
 };
 
@@ -358,16 +366,27 @@ template <class Machine> class Compensator {
   }
 
   // The IK of the pose handed on by prepare(), non-inlined for the same
-  // reason: its locals are not on the stack while prepare() runs.
-  KINCAL_NOINLINE_FLATTEN CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
-    if constexpr (family == MachineFamily::Stewart6Ups) {
-      return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));  // seed 001
-    } else {
+  // reason: its locals are not on the stack while prepare() runs. The
+  // hybrid's two IKs are separate calls for the same reason: the exact IK's
+  // chains and the closed form's frames are never on the stack together.
+  KINCAL_NOINLINE CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
+    if constexpr (family == MachineFamily::Hybrid) {
       // The identified machine's exact IK (issue #31); with no structural
       // error it is seed 000 Fig. 4's ideal IK with ξ̂.
-      if (model_.structural) return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal));
-      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));
+      if (model_.structural)
+        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.up_split, model_.source_errors,
+                                                      model_.encoder_offsets, target, ideal));
     }
+    return solve_closed_form(target, ideal);
+  }
+
+  // The closed-form IK: the 6-UPS's calibrated geometry (seed 001), the
+  // hybrid's nominal one with ξ̂ (seed 000 Fig. 4).
+  KINCAL_NOINLINE_FLATTEN CompensationStatus solve_closed_form(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
+    if constexpr (family == MachineFamily::Stewart6Ups)
+      return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));
+    else
+      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));
   }
 
   // At the nominal configuration of `pose`: q_nom, the singularity test, the

@@ -122,16 +122,15 @@ Vec6<Scalar> effect_joint_error(const EffectParameters<Scalar>& e, const Vec6<Sc
   Vec6<Scalar> dq = e.scale.cwiseProduct(q) + e.backlash.cwiseProduct(in.direction) +
                     e.compliance.cwiseProduct(in.load);
   const Scalar k = Scalar(2) * pi<Scalar>() / e.screw_lead;
-  // sin and cos unqualified: for float and double they are std's; identify's
-  // automatic-differentiation scalar (Eigen's AutoDiffScalar) finds its own,
-  // so the identification columns are this function's derivative
-  // (identify/effects.hpp, JointSpaceEffect).
-  using std::cos;
-  using std::sin;
+  // sin_and_cos: libm-free for float and double (core/sin_cos.hpp);
+  // identify's automatic-differentiation scalar (Eigen's AutoDiffScalar)
+  // uses its own, so the identification columns are this function's
+  // derivative (identify/effects.hpp, JointSpaceEffect).
   for (int i = 0; i < 6; ++i) {
     if ((e.screw_joints & (1u << i)) == 0) continue;
-    const Scalar phase = k * q(i);
-    dq(i) += e.cyclic_sin(i) * sin(phase) + e.cyclic_cos(i) * cos(phase);
+    Scalar sine, cosine;
+    sin_and_cos(Scalar(k * q(i)), sine, cosine);
+    dq(i) += e.cyclic_sin(i) * sine + e.cyclic_cos(i) * cosine;
   }
 #if KINCAL_CORE_USER_EFFECT
   if (e.user_error != nullptr)

@@ -28,6 +28,7 @@
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/core/pose.hpp"
+#include "kincal/core/sin_cos.hpp"
 #include "kincal/core/small_lu.hpp"
 #include "kincal/core/status.hpp"
 
@@ -97,36 +98,8 @@ template <class S> Mat3<S> columns(const Vec3<S>& x, const Vec3<S>& y, const Vec
   return m;
 }
 
-// sin a and cos a without libm: a halved until |a| ≤ 1/8, their series there
-// (to a⁹ and a¹⁰: the next terms are below 1e-17), then doubled back
-// (sin 2a = 2 sin a cos a, cos 2a = 1 − 2 sin² a); each doubling costs about
-// one rounding, and joint angles need at most five. libm's sin / cos carry
-// a large-argument reduction that is 0.7 KiB of Cortex-M stack on the
-// controller's deepest path (docs/benchmarks.md). False (outputs untouched)
-// for |a| > 4000 rad or not finite: no joint of these machines turns that far.
-template <class S> bool sin_cos(S a, S& sine, S& cosine) {
-  const S limit(4000);
-  if (!(a <= limit && a >= -limit)) return false;
-  int halvings = 0;
-  while (a > S(0.125) || a < S(-0.125)) {
-    a *= S(0.5);
-    ++halvings;
-  }
-  const S t = a * a;
-  S s = a * (S(1) - t / S(6) * (S(1) - t / S(20) * (S(1) - t / S(42) * (S(1) - t / S(72)))));
-  S c = S(1) - t / S(2) * (S(1) - t / S(12) * (S(1) - t / S(30) * (S(1) - t / S(56) * (S(1) - t / S(90)))));
-  for (int k = 0; k < halvings; ++k) {
-    const S s2 = S(2) * s * c;
-    c = S(1) - S(2) * s * s;
-    s = s2;
-  }
-  sine = s;
-  cosine = c;
-  return true;
-}
-
 template <class S> Mat3<S> rotation_about(int axis, S angle) {
-  S s(0), c(1);
+  S s, c;
   sin_cos(angle, s, c);  // a finite error angle (checked before it gets here)
   Mat3<S> R = Mat3<S>::Identity();
   const int i = (axis + 1) % 3, j = (axis + 2) % 3;
@@ -211,21 +184,30 @@ template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
   T.R.col(1) = c * T.R.col(1) - s * x_axis;
 }
 
-// A chain's end pose at joint values x, and each joint's axis (direction,
-// a point on it) in `axes` if given.
-template <class S, int N>
-Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent, const S* x,
-                  HybridJointAxes<S, N>* axes) {
+// A chain's end pose at joint values x; `visit(j, direction, point)` is told
+// each joint's axis in the world on the way (the Newton writes its Jacobian
+// from them, straight into the LU's storage).
+template <class S, int N, class Visit>
+Pose<S> chain_end_visiting(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent, const S* x,
+                           Visit&& visit) {
   Pose<S> T = parent * c.base;
   for (int j = 0; j < N; ++j) {
     T = T * c.link[j];
-    if (axes != nullptr) {
-      axes->direction[j] = T.R.col(2);
-      axes->point[j] = T.p;
-    }
+    visit(j, T.R.col(2), T.p);
     move_along_joint(T, prismatic[j], x[j]);
   }
   return T * c.end;
+}
+
+// The same, with the axes in `axes` if given.
+template <class S, int N>
+Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent, const S* x,
+                  HybridJointAxes<S, N>* axes) {
+  return chain_end_visiting(c, prismatic, parent, x, [axes](int j, const auto& direction, const auto& point) {
+    if (axes == nullptr) return;
+    axes->direction[j] = direction;
+    axes->point[j] = point;
+  });
 }
 
 // The residual that moves a chain's end onto `target`: (Δp, ω) in world axes,
@@ -246,8 +228,9 @@ template <class S> Vec6<S> closure_residual(const Pose<S>& target, const Pose<S>
 // The reference frames {R_1,i} … {R_6,i} of a U-P-S limb (every angle zero,
 // the leg straight from the U centre A1 to the S centre A6;
 // docs/hybrid-error-model.md): U axes t and u × t at A1, P along u, S axes t,
-// u × t, u at A6, t = u × z0 horizontal (x0 for a vertical leg).
-template <class S> void ups_reference_frames(const Vec3<S>& A1, const Vec3<S>& A6, Pose<S>* frames) {
+// u × t, u at A6, t = u × z0 horizontal (x0 for a vertical leg). One frame
+// (j = 0 … 5) at a time, so a controller building a limb holds one, not six.
+template <class S> Pose<S> ups_reference_frame(const Vec3<S>& A1, const Vec3<S>& A6, int j) {
   using hybrid_exact_detail::columns;
   using hybrid_exact_detail::make_pose;
   const Vec3<S> u = (A6 - A1).normalized();
@@ -255,12 +238,17 @@ template <class S> void ups_reference_frames(const Vec3<S>& A1, const Vec3<S>& A
   if (t.norm() < S(1e-6)) t = Vec3<S>::UnitX();
   t.normalize();
   const Vec3<S> n = u.cross(t);
-  frames[0] = make_pose<S>(columns<S>(u, t.cross(u), t), A1);  // z = t, x = u
-  frames[1] = make_pose<S>(columns<S>(t, -u, n), A1);          // z = u × t, x = t
-  frames[2] = make_pose<S>(columns<S>(n, -t, u), A1);          // z = u (P), x = u × t
-  frames[3] = make_pose<S>(columns<S>(u, t.cross(u), t), A6);  // z = t, x = u
-  frames[4] = make_pose<S>(columns<S>(t, -u, n), A6);          // z = u × t, x = t
-  frames[5] = make_pose<S>(columns<S>(t, n, u), A6);           // z = u, x = t
+  switch (j) {
+    case 0: return make_pose<S>(columns<S>(u, t.cross(u), t), A1);  // z = t, x = u
+    case 1: return make_pose<S>(columns<S>(t, -u, n), A1);          // z = u × t, x = t
+    case 2: return make_pose<S>(columns<S>(n, -t, u), A1);          // z = u (P), x = u × t
+    case 3: return make_pose<S>(columns<S>(u, t.cross(u), t), A6);  // z = t, x = u
+    case 4: return make_pose<S>(columns<S>(t, -u, n), A6);          // z = u × t, x = t
+    default: return make_pose<S>(columns<S>(t, n, u), A6);          // z = u, x = t
+  }
+}
+template <class S> void ups_reference_frames(const Vec3<S>& A1, const Vec3<S>& A6, Pose<S>* frames) {
+  for (int j = 0; j < 6; ++j) frames[j] = ups_reference_frame(A1, A6, j);
 }
 
 // The nominal U-P-S limb of ups_reference_frames closed on `target` in
@@ -293,18 +281,23 @@ template <class S> bool nominal_ups_joints(const Vec3<S>& A1, const Mat3<S>& E, 
 // joint) folded in unless null.
 template <class S> void build_ups_limb(const HybridGeometry<S>& g, int i, const S* eta, HybridUpsLimb<S>& limb) {
   using namespace hybrid_exact_detail;
-  const Pose<S> world;
-  const Pose<S> platform_ref = make_pose<S>(Mat3<S>::Identity(), Vec3<S>(g.home.extension * Vec3<S>::UnitZ()));
+  const Vec3<S> platform_ref(S(0), S(0), g.home.extension);
   const Vec3<S> A1 = g.base_joints.col(i);
-  const Vec3<S> A6 = platform_ref.p + g.platform_joints.col(i);
-  Pose<S> frames[6];
-  ups_reference_frames(A1, A6, frames);
-  const S x_ref[6] = {S(0), S(0), (A6 - A1).norm(), S(0), S(0), S(0)};
+  const Vec3<S> A6 = platform_ref + g.platform_joints.col(i);
   limb.links.base = make_pose<S>(Mat3<S>::Identity(), A1);  // {R_0,i}: at A1i, axes of {R0}
-  set_links(limb.links, kUpsPrismatic, world, frames, x_ref, frames[5]);
-  limb.attach = platform_ref.inverse() * frames[5];
+  // set_links over the reference frames, one frame at a time (x_ref: every
+  // angle zero, the P joint at the leg's length).
+  Pose<S> previous = limb.links.base;  // the last joint frame after its motion at x_ref
+  for (int j = 0; j < 6; ++j) {
+    const Pose<S> frame = ups_reference_frame(A1, A6, j);
+    limb.links.link[j] = previous.inverse() * frame;
+    previous = frame;
+    if (kUpsPrismatic[j]) previous.p += (A6 - A1).norm() * frame.R.col(2);
+  }
+  limb.links.end = Pose<S>();  // the last S frame is the end frame
+  limb.attach = make_pose<S>(previous.R, Vec3<S>(A6 - platform_ref));
   limb.origin = A1;
-  limb.axes = frames[5].R;
+  limb.axes = previous.R;
   if (eta != nullptr) fold_errors(limb.links, kUpsPrismatic, true, eta);
 }
 
@@ -400,44 +393,46 @@ template <> struct HybridExactTolerance<float> {
 
 namespace hybrid_exact_detail {
 
-// Newton on the joint variables x of a 6-joint serial chain (`ends(x, axes)`
-// returns the end pose and, if asked, the six joint axes) until its end
-// coincides with `target`. The Jacobian's columns are the joints' twists at
-// the end point; revolute columns and rotation rows are scaled by the
-// characteristic length L so the LU's pivot ratio judges a dimensionless
-// matrix (the singularity test of core), built in the LU's own storage.
-// On Ok `lu` holds the last factorisation (δy = J⁻¹·δ(end), revolute y = L·θ).
+// Newton on the joint variables x of a 6-joint serial chain (`ends(x,
+// visit)` returns the end pose and tells `visit(j, direction, point)` each
+// joint's axis) until its end coincides with `target`. The Jacobian's
+// columns are the joints' twists at the end point; revolute columns and
+// rotation rows are scaled by the characteristic length L so the LU's pivot
+// ratio judges a dimensionless matrix (the singularity test of core). They
+// are written during the chain's evaluation into the LU's own storage, as
+// Plücker coordinates (p × a, a), and moved to the end point once it is
+// known (a × (P − p) = a × P + p × a): no copy of the axes on the stack.
+// On Ok `lu` holds a factorisation at the last iterate or the one before
+// (δy = J⁻¹·δ(end), revolute y = L·θ) if `keep_factorisation`, for the FK's
+// outer Newton; otherwise the IK's last evaluation is not factorised.
 template <class S, class Ends>
-Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu) {
+Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu,
+                    bool keep_factorisation = false) {
   S previous = S(0);
   for (int it = 0;; ++it) {
-    HybridJointAxes<S, 6> axes;
-    const Pose<S> end = ends(x, &axes);
+    auto J = lu.storage();
+    const Pose<S> end = ends(x, [&J](int j, const auto& a, const auto& p) {
+      J.template block<3, 1>(0, j) = p.cross(a);
+      J.template block<3, 1>(3, j) = a;
+    });
     Vec6<S> e = closure_residual(target, end);
     e.template tail<3>() *= L;
     const S err = e.cwiseAbs().maxCoeff();
     if (!(err == err)) return Status::NotConverged;
-    // Closed: the factorisation of the previous iterate stays in `lu` (the
-    // FK's outer Newton needs a Jacobian here, not the last digit of one).
-    if (it > 0 && (err <= HybridExactTolerance<S>::closure ||
-                   (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous)))
-      return Status::Ok;
-    {
-      auto J = lu.storage();
-      for (int j = 0; j < 6; ++j) {
-        const Vec3<S>& a = axes.direction[j];
-        if (prismatic[j]) {
-          J.template block<3, 1>(0, j) = a;
-          J.template block<3, 1>(3, j).setZero();
-        } else {  // (a × (P − p), a)·dθ, with dθ = dy / L and the rows ω × L
-          const Vec3<S> arm = end.p - axes.point[j];
-          J.template block<3, 1>(0, j) = a.cross(arm) / L;
-          J.template block<3, 1>(3, j) = a;
-        }
+    for (int j = 0; j < 6; ++j) {
+      if (prismatic[j]) {
+        J.template block<3, 1>(0, j) = J.template block<3, 1>(3, j);
+        J.template block<3, 1>(3, j).setZero();
+      } else {  // (a × (P − p), a)·dθ, with dθ = dy / L and the rows ω × L
+        const Vec3<S> a = J.template block<3, 1>(3, j);
+        J.template block<3, 1>(0, j) = (a.cross(end.p) + J.template block<3, 1>(0, j)) / L;
       }
     }
+    const bool closed = it > 0 && (err <= HybridExactTolerance<S>::closure ||
+                                   (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous));
+    if (closed && !keep_factorisation) return Status::Ok;
     if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
-    if (it == 0 && err <= HybridExactTolerance<S>::closure) return Status::Ok;  // the start was the solution
+    if (closed || (it == 0 && err <= HybridExactTolerance<S>::closure)) return Status::Ok;  // (or the start was the solution)
     if (it == HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
     const Vec6<S> step = lu.solve(e);
     for (int j = 0; j < 6; ++j) x[j] += prismatic[j] ? step(j) : step(j) / L;
@@ -457,14 +452,13 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
 // UPS limb `limb` closed on the platform pose `platform` (in {R0}): its six
 // joint variables x, Newton from the nominal closed form.
 template <class S>
-Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S* x, SmallLu<S, 6>& lu) {
+Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S* x, SmallLu<S, 6>& lu,
+                 bool keep_factorisation = false) {
   const Pose<S> target = platform * limb.attach;
   if (!nominal_ups_joints(limb.origin, limb.axes, target, x)) return Status::Unreachable;
   const Pose<S> world;
-  auto ends = [&](const S* xs, HybridJointAxes<S, 6>* axes) {
-    return chain_end(limb.links, kUpsPrismatic, world, xs, axes);
-  };
-  return close_serial(ends, kUpsPrismatic, target, L, x, lu);
+  auto ends = [&](const S* xs, auto&& visit) { return chain_end_visiting(limb.links, kUpsPrismatic, world, xs, visit); };
+  return close_serial(ends, kUpsPrismatic, target, L, x, lu, keep_factorisation);
 }
 
 // The nominal machine's configuration at a tool pose as the serial chain's
@@ -484,36 +478,28 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
 }
 
 // The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
-// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from the
-// nominal machine's closed-form configuration there. Writes x and the
-// platform pose at the solution.
+// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from x (the
+// nominal machine's closed-form configuration there: serial_start, called
+// first by the caller so that its frames and the chains are never on the
+// stack together). Writes x and the platform pose at the solution.
 template <class S>
 Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
-                          const HybridSerialLinks<S>& wrist, S up_split, const Pose<S>& tool, S* x, Pose<S>& platform) {
-  const Status s = serial_start(nominal, up_split, tool, x);
-  if (s != Status::Ok) return s;
+                          const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, Pose<S>& platform) {
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
   const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
   Pose<S> target;
   target.R = Rt * tool.R;
   target.p = nominal.workpiece_origin + Rt * tool.p;
   const Pose<S> world;
-  auto serial = [&](const S* xs, HybridJointAxes<S, 6>* axes) {
-    if (axes == nullptr) {
-      platform = chain_end(up, kUpPrismatic, world, xs, static_cast<HybridJointAxes<S, 3>*>(nullptr));
-      return chain_end(wrist, kWristPrismatic, platform, xs + 3, static_cast<HybridJointAxes<S, 3>*>(nullptr));
-    }
-    HybridJointAxes<S, 3> half;
-    platform = chain_end(up, kUpPrismatic, world, xs, &half);
-    for (int j = 0; j < 3; ++j) axes->direction[j] = half.direction[j], axes->point[j] = half.point[j];
-    const Pose<S> end = chain_end(wrist, kWristPrismatic, platform, xs + 3, &half);
-    for (int j = 0; j < 3; ++j) axes->direction[3 + j] = half.direction[j], axes->point[3 + j] = half.point[j];
-    return end;
+  auto serial = [&](const S* xs, auto&& visit) {
+    platform = chain_end_visiting(up, kUpPrismatic, world, xs, visit);
+    return chain_end_visiting(wrist, kWristPrismatic, platform, xs + 3,
+                              [&visit](int j, const auto& a, const auto& p) { visit(3 + j, a, p); });
   };
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
   SmallLu<S, 6> lu;
   const Status closed = close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, lu);
-  if (closed == Status::Ok) serial(x, nullptr);  // the platform at the solution
+  if (closed == Status::Ok) serial(x, [](int, const auto&, const auto&) {});  // the platform at the solution
   return closed;
 }
 
@@ -547,8 +533,10 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
+  Status s = serial_start(nominal, c.up_split, tool, x);
+  if (s != Status::Ok) return s;
   Pose<S> platform;
-  Status s = close_up_and_wrist(nominal, c.up, c.wrist, c.up_split, tool, x, platform);
+  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
@@ -580,7 +568,18 @@ KINCAL_EXACT_NOINLINE Status stage_up_and_wrist(const HybridGeometry<S>& nominal
   HybridSerialLinks<S> up, wrist;
   build_serial_chains(nominal, up_split, chi + HybridErrorLayout::up(), chi + HybridErrorLayout::wrist(),
                       chi + HybridErrorLayout::tool(), up, wrist);
-  return close_up_and_wrist(nominal, up, wrist, up_split, tool, x, platform);
+  return close_up_and_wrist(nominal, up, wrist, tool, x, platform);
+}
+
+// A limb's leg length at a platform pose: the closure in its own frame, so
+// the limb's construction and its Newton are not on the stack together.
+template <class S>
+KINCAL_EXACT_NOINLINE Status ups_leg_length(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& length) {
+  S xu[6];
+  SmallLu<S, 6> lu;
+  const Status s = close_ups(limb, platform, L, xu, lu);
+  if (s == Status::Ok) length = xu[2];
+  return s;
 }
 
 template <class S>
@@ -588,11 +587,7 @@ KINCAL_EXACT_NOINLINE Status stage_ups(const HybridGeometry<S>& nominal, const S
                                        S& length) {
   HybridUpsLimb<S> limb;
   build_ups_limb(nominal, i, chi + HybridErrorLayout::ups(i), limb);
-  S xu[6];
-  SmallLu<S, 6> lu;
-  const Status s = close_ups(limb, platform, nominal.characteristic_length, xu, lu);
-  if (s == Status::Ok) length = xu[2];
-  return s;
+  return ups_leg_length(limb, platform, nominal.characteristic_length, length);
 }
 
 }  // namespace hybrid_exact_detail
@@ -609,8 +604,10 @@ KINCAL_EXACT_NOINLINE Status hybrid_exact_ik(const HybridGeometry<S>& nominal, S
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
+  Status s = serial_start(nominal, up_split, tool, x);
+  if (s != Status::Ok) return s;
   Pose<S> platform;
-  Status s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, platform);
+  s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
@@ -656,7 +653,7 @@ FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains
     for (int i = 0; i < 3; ++i) {
       S xu[6];
       SmallLu<S, 6> lu;
-      const Status s = close_ups(c.ups[i], platform, L, xu, lu);
+      const Status s = close_ups(c.ups[i], platform, L, xu, lu, true);
       if (s != Status::Ok) {
         report.status = s;
         return report;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "kincal/core/scalar.hpp"
+#include "kincal/core/sin_cos.hpp"
 
 namespace kincal {
 
@@ -22,19 +23,22 @@ template <class Scalar> Mat3<Scalar> skew(const Vec3<Scalar>& v) {
 }
 
 template <class Scalar> Mat3<Scalar> rot_x(Scalar a) {
-  const Scalar c = std::cos(a), s = std::sin(a);
+  Scalar s, c;
+  sin_and_cos(a, s, c);
   Mat3<Scalar> m;
   m << Scalar(1), Scalar(0), Scalar(0), Scalar(0), c, -s, Scalar(0), s, c;
   return m;
 }
 template <class Scalar> Mat3<Scalar> rot_y(Scalar a) {
-  const Scalar c = std::cos(a), s = std::sin(a);
+  Scalar s, c;
+  sin_and_cos(a, s, c);
   Mat3<Scalar> m;
   m << c, Scalar(0), s, Scalar(0), Scalar(1), Scalar(0), -s, Scalar(0), c;
   return m;
 }
 template <class Scalar> Mat3<Scalar> rot_z(Scalar a) {
-  const Scalar c = std::cos(a), s = std::sin(a);
+  Scalar s, c;
+  sin_and_cos(a, s, c);
   Mat3<Scalar> m;
   m << c, -s, Scalar(0), s, c, Scalar(0), Scalar(0), Scalar(0), Scalar(1);
   return m;
@@ -63,8 +67,10 @@ template <class Scalar> Mat3<Scalar> exp_so3(const Vec3<Scalar>& w) {
     b = Scalar(0.5) - theta2 / Scalar(24);
   } else {
     const Scalar theta = std::sqrt(theta2);
-    a = std::sin(theta) / theta;
-    b = (Scalar(1) - std::cos(theta)) / theta2;
+    Scalar sine, cosine;
+    sin_and_cos(theta, sine, cosine);
+    a = sine / theta;
+    b = (Scalar(1) - cosine) / theta2;
   }
   return Mat3<Scalar>::Identity() + a * W + b * W * W;
 }

@@ -769,8 +769,11 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
   // Residuals of measured rows: no joint limits (joint_limits.hpp).
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   // The identified machine (its exact chains; the nominal one without a model).
-  const HybridChains<double> chains =
-      compensation != nullptr ? compensation->chains() : hybrid_nominal_chains(g0, HybridErrorModelOptions().up_split);
+  HybridChains<double> chains;
+  if (compensation != nullptr)
+    chains = compensation->chains();
+  else
+    hybrid_exact_chains(g0, HybridErrorModelOptions().up_split, static_cast<const double*>(nullptr), chains);
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;
   std::vector<UnevaluatedRow> unevaluated;
