@@ -134,14 +134,16 @@ template <class S> void expand_joint_error(const S* e, bool prismatic, S* d) {
 }
 
 // The links of a chain from the world poses of its joint frames at a
-// reference configuration x_ref and of its end frame there.
-template <class S, int N>
-void set_links(HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent_ref, const Pose<S>* frames,
+// reference configuration x_ref (frame_at(j), made one at a time so the
+// controller's stack never holds them all) and of its end frame there.
+template <class S, int N, class FrameAt>
+void set_links(HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent_ref, const FrameAt& frame_at,
                const S* x_ref, const Pose<S>& end_ref) {
   Pose<S> prev = parent_ref * c.base;
   for (int j = 0; j < N; ++j) {
-    c.link[j] = prev.inverse() * frames[j];
-    prev = frames[j] * joint_motion(prismatic[j], x_ref[j]);
+    const Pose<S> frame = frame_at(j);
+    c.link[j] = prev.inverse() * frame;
+    prev = frame * joint_motion(prismatic[j], x_ref[j]);
   }
   c.end = prev.inverse() * end_ref;
 }
@@ -179,9 +181,11 @@ template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
     T.p.setConstant(x - x + S(NAN));
     return;
   }
-  const Vec3<S> x_axis = T.R.col(0);
-  T.R.col(0) = c * x_axis + s * T.R.col(1);
-  T.R.col(1) = c * T.R.col(1) - s * x_axis;
+  for (int k = 0; k < 3; ++k) {  // R·Rz(x), row by row: no column temporary on the controller's deepest path
+    const S rx = T.R(k, 0), ry = T.R(k, 1);
+    T.R(k, 0) = c * rx + s * ry;
+    T.R(k, 1) = c * ry - s * rx;
+  }
 }
 
 // A chain's end pose at joint values x; `visit(j, direction, point)` is told
@@ -313,26 +317,26 @@ void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta
   const Pose<S> world;
   const Pose<S> platform_ref = make_pose<S>(Mat3<S>::Identity(), Vec3<S>(c_ref * ez));
   {
-    const Pose<S> frames[3] = {
-        make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>::Zero()),  // z = x0
-        make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>::Zero()),  // z = y0
-        make_pose<S>(Mat3<S>::Identity(), Vec3<S>::Zero()),      // z = z0 (= w), at A0
+    const auto frame_at = [&](int j) {
+      if (j == 0) return make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>::Zero());  // z = x0
+      if (j == 1) return make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>::Zero());  // z = y0
+      return make_pose<S>(Mat3<S>::Identity(), Vec3<S>::Zero());                  // z = z0 (= w), at A0
     };
     const S x_ref[3] = {S(0), S(0), c_ref - e};
     up.base = Pose<S>();
-    set_links(up, kUpPrismatic, world, frames, x_ref, platform_ref);
+    set_links(up, kUpPrismatic, world, frame_at, x_ref, platform_ref);
     if (up_eta != nullptr) fold_errors(up, kUpPrismatic, true, up_eta);
   }
   {
     const S zq = c_ref + g.platform_to_wrist, zp0 = zq + g.wrist_link;
-    const Pose<S> frames[3] = {
-        make_pose<S>(columns<S>(ey, -ex, ez), Vec3<S>((c_ref - e) * ez)),  // z = w, at A44
-        make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>(zq * ez)),           // z = F4·x through Q
-        make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>(zp0 * ez)),          // z = F5·y through P0
+    const auto frame_at = [&](int j) {
+      if (j == 0) return make_pose<S>(columns<S>(ey, -ex, ez), Vec3<S>((c_ref - e) * ez));  // z = w, at A44
+      if (j == 1) return make_pose<S>(columns<S>(ez, -ey, ex), Vec3<S>(zq * ez));           // z = F4·x through Q
+      return make_pose<S>(columns<S>(ex, -ez, ey), Vec3<S>(zp0 * ez));                      // z = F5·y through P0
     };
     const S x_ref[3] = {S(0), S(0), S(0)};
     wrist.base = Pose<S>();
-    set_links(wrist, kWristPrismatic, platform_ref, frames, x_ref,
+    set_links(wrist, kWristPrismatic, platform_ref, frame_at, x_ref,
               make_pose<S>(g.tool_offset, Vec3<S>((zp0 + g.tool_length) * ez)));
     if (wrist_eta != nullptr) fold_errors(wrist, kWristPrismatic, false, wrist_eta);
     if (tool_eta != nullptr) wrist.end = wrist.end * error_transform(tool_eta);

@@ -106,9 +106,13 @@ template <class Scalar> struct Pose {
   }
 
   Pose operator*(const Pose& b) const {
+    // noalias: out is a fresh object, so Eigen need not evaluate the product
+    // into a temporary first (on the controller that temporary and its
+    // assignment calls were the deepest frames of the exact IK).
     Pose out;
-    out.R = R * b.R;
-    out.p = R * b.p + p;
+    out.R.noalias() = R * b.R;
+    out.p = p;
+    out.p.noalias() += R * b.p;
     return out;
   }
   Pose inverse() const {
