@@ -69,8 +69,7 @@ std::string robot_with_targets() {
 // data (hybrid_errors.cpp); at 1e-3, the tolerance noisy data need, the UPS
 // joint centres were left 0.26 µm, the UP limb and the wrist's axis lines
 // 0.15 µm. Before the tool frame was in the model the `tool` group was left
-// 14 µm off from full poses. (At 1 mm / 2 mrad the model's first-order
-// error twist is not enough: the exact model is issue #31's open part.)
+// 14 µm off from full poses.
 TEST(IndependentHybrid, EachPhysicalGroupIsAbsorbedAndCompensated) {
   const std::vector<V6> cal = random_poses(90, 0.1, 3101), test = random_poses(40, 0.1, 3102);
   const std::string targets_robot = robot_with_targets();
@@ -89,12 +88,10 @@ TEST(IndependentHybrid, EachPhysicalGroupIsAbsorbedAndCompensated) {
       EXPECT_EQ(h.poses, int(test.size())) << name;
       if (inst == Instrument::Targets) {
         // Fitted targets: the tool frame is the fit's convention, the
-        // targets are what the machine is judged by. The UPS joint centres
-        // miss the bar here (0.129 µm): the first-order error twist of the
-        // model (seed 000 Eq. (16)) at the fit's target-shifted estimate;
-        // the exact model (core/hybrid_exact.hpp, not yet the compensator's:
-        // issue #31) reaches 0.014 µm on the same data.
-        EXPECT_LE(h.target_um, group == "ups_joint_centres" ? 0.15 : 0.05) << name;
+        // targets are what the machine is judged by. (With the first-order
+        // error twist, seed 000 Eq. (16), the UPS joint centres were left
+        // 0.129 µm here; the exact model reaches the bar.)
+        EXPECT_LE(h.target_um, 0.05) << name;
       } else {
         EXPECT_LE(h.position_um, 0.05) << name;
         EXPECT_LE(h.rotation_urad, 0.2) << name;
@@ -102,6 +99,45 @@ TEST(IndependentHybrid, EachPhysicalGroupIsAbsorbedAndCompensated) {
       if (group == "tool" && inst != Instrument::Targets) {
         EXPECT_LE(h.position_um, 1e-3) << name;  // the new frame, exactly
       }
+    }
+  }
+}
+
+// The same loop at 1 mm / 2 mrad, every group at once and each alone, noise
+// free: the erroneous machine's own kinematics (core/hybrid_exact.hpp) in
+// identify and in the compensator. What differs from the test above: ten
+// times the errors, another random design and error draw, tilts to ±0.15 rad.
+// The issue's bar (0.05 µm / 0.2 µrad) holds for the UPS axes, leg offsets,
+// tool and encoders. It does not yet hold where the machine's S centres
+// move on the platform (issue #31, open): the model misplaces a ball only
+// on the leg side, which is the platform-side misplacement to first order
+// only. Measured here: UPS joint centres 1.31 µm / 2.52 µrad, UP limb (a
+// slide tilted under the platform turns the platform, so its S centres)
+// 0.81 µm / 1.75 µrad, all groups 1.66 µm / 5.39 µrad from full poses,
+// the wrist's lines 0.145 µm / 0.13 µrad. Those cases are held to twice
+// what they measure, so that they cannot get worse unnoticed; the branch
+// `s-centre` moves joint 6's Δx, Δy after its motion and takes them to
+// ≤ 0.054 µm (docs/hybrid-error-model.md §9).
+TEST(IndependentHybrid, MillimetreErrorsAreAbsorbedByTheExactModel) {
+  const std::vector<V6> cal = random_poses(90, 0.15, 3111), test = random_poses(40, 0.15, 3112);
+  std::vector<std::vector<std::string>> cases = {ind::HybridErrors::group_names()};
+  for (const std::string& g : ind::HybridErrors::group_names()) cases.push_back({g});
+  for (const Instrument inst : {Instrument::FullPose, Instrument::Gauge}) {
+    ind::MeasurementSpec spec;
+    if (inst != Instrument::FullPose) spec.targets = ind::HybridSimulator::gauge_targets();
+    for (const auto& groups : cases) {
+      const ind::HybridErrors e = ind::random_hybrid_errors(1.0, 2e-3, 29, groups);
+      const std::string name = std::string(inst == Instrument::FullPose ? "mm_pose_" : "mm_gauge_") +
+                               (groups.size() > 1 ? std::string("all") : groups[0]);
+      const ind::HeldOut h = ind::identify_and_compensate(kDir, "hybrid-seed000", name, ind::HybridSimulator(e),
+                                                          ind::make_hybrid_dataset(e, cal, spec), test, nullptr);
+      std::printf("  %-32s held-out RMS %.4f um, worst %.4f um, %.4f urad (%d poses)\n", name.c_str(), h.rms_um,
+                  h.position_um, h.rotation_urad, h.poses);
+      EXPECT_EQ(h.poses, int(test.size())) << name;
+      const bool platform_centres = groups.size() > 1 || groups[0] == "ups_joint_centres" || groups[0] == "up_limb";
+      const bool wrist_lines = groups.size() == 1 && groups[0] == "wrist_axis_lines";
+      EXPECT_LE(h.position_um, platform_centres ? 3.4 : wrist_lines ? 0.3 : 0.05) << name;
+      EXPECT_LE(h.rotation_urad, platform_centres ? 11.0 : wrist_lines ? 0.3 : 0.2) << name;
     }
   }
 }

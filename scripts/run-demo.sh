@@ -127,7 +127,7 @@ $kincal simulate --robot hybrid-seed000 --poses out/hybrid_test_poses.csv \
   --errors examples/hybrid-seed000/errors.csv --out out/hybrid_test_uncompensated.csv
 $kincal errors --data out/hybrid_test_uncompensated.csv | tail -n +2
 echo
-echo "   the same nodes with the compensated joint commands (seed 000 Eq. (16)):"
+echo "   the same nodes with the compensated joint commands (the identified machine inverted exactly):"
 $kincal simulate --robot hybrid-seed000 --poses out/hybrid_test_joints.csv \
   --errors examples/hybrid-seed000/errors.csv --out out/hybrid_test_compensated.csv
 $kincal errors --data out/hybrid_test_compensated.csv | tail -n +2

@@ -52,11 +52,11 @@ inline constexpr double kCalibrationValues_double[295] = {
     // machine.nominal.tool_length
     250.0,
     // machine.nominal.workpiece_rotation
-    -5.3028761936245346e-17, 1.0, -3.0616169978683824e-17, 0.86602540378443871, 6.123233995736766e-17, 0.49999999999999994, 0.49999999999999994, 0.0, -0.86602540378443871,
+    1.9229626863835643e-16, 1.0, 1.1102230246251564e-16, 0.86602540378443882, -2.2204460492503131e-16, 0.49999999999999994, 0.49999999999999994, 0.0, -0.86602540378443882,
     // machine.nominal.workpiece_origin
     0.0, -184.99999999999994, 1575.4293994002423,
     // machine.nominal.tool_offset
-    -5.3028761936245346e-17, 1.0, 1.1102230246251565e-16, 1.0, 5.3028761936245346e-17, -3.0616169978683818e-17, -3.0616169978683824e-17, 1.1102230246251565e-16, -1.0,
+    1.9229626863835643e-16, 1.0000000000000002, 0.0, 1.0, -1.9229626863835641e-16, 1.1102230246251563e-16, 1.1102230246251564e-16, 0.0, -1.0000000000000002,
     // machine.nominal.joint_offset
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // machine.nominal.min_joint
@@ -249,9 +249,9 @@ inline constexpr double kCalibrationValues_double[295] = {
     // effects.screw_joints
     7.0,
     // effects.load_direction
-    -0.49999999999999994, 0.0, 0.86602540378443871,
+    -0.49999999999999994, 0.0, 0.86602540378443882,
     // effects.thermal_origin
-    -627.5, 1.1327982892113014e-14, 1456.8618817494707,
+    -627.49999999999989, -4.1078251911130779e-14, 1456.8618817494707,
     // effects.reference_temperature
     20.0,
     // effects.user
@@ -263,7 +263,7 @@ inline constexpr double kCalibrationValues_double[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kCalibrationCrc_double = 0xB72453FCu;
+inline constexpr std::uint32_t kCalibrationCrc_double = 0x4FBF33D8u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kCalibrationTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kCalibrationValues_double, kCalibrationCrc_double);
 static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_double,
@@ -283,11 +283,11 @@ inline constexpr double kNominalValues_double[295] = {
     // machine.nominal.tool_length
     250.0,
     // machine.nominal.workpiece_rotation
-    -5.3028761936245346e-17, 1.0, -3.0616169978683824e-17, 0.86602540378443871, 6.123233995736766e-17, 0.49999999999999994, 0.49999999999999994, 0.0, -0.86602540378443871,
+    1.9229626863835643e-16, 1.0, 1.1102230246251564e-16, 0.86602540378443882, -2.2204460492503131e-16, 0.49999999999999994, 0.49999999999999994, 0.0, -0.86602540378443882,
     // machine.nominal.workpiece_origin
     0.0, -184.99999999999994, 1575.4293994002423,
     // machine.nominal.tool_offset
-    -5.3028761936245346e-17, 1.0, 1.1102230246251565e-16, 1.0, 5.3028761936245346e-17, -3.0616169978683818e-17, -3.0616169978683824e-17, 1.1102230246251565e-16, -1.0,
+    1.9229626863835643e-16, 1.0000000000000002, 0.0, 1.0, -1.9229626863835641e-16, 1.1102230246251563e-16, 1.1102230246251564e-16, 0.0, -1.0000000000000002,
     // machine.nominal.joint_offset
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // machine.nominal.min_joint
@@ -480,9 +480,9 @@ inline constexpr double kNominalValues_double[295] = {
     // effects.screw_joints
     7.0,
     // effects.load_direction
-    -0.49999999999999994, 0.0, 0.86602540378443871,
+    -0.49999999999999994, 0.0, 0.86602540378443882,
     // effects.thermal_origin
-    -627.5, 1.1327982892113014e-14, 1456.8618817494707,
+    -627.49999999999989, -4.1078251911130779e-14, 1456.8618817494707,
     // effects.reference_temperature
     20.0,
     // effects.user
@@ -494,7 +494,7 @@ inline constexpr double kNominalValues_double[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kNominalCrc_double = 0x626F1573u;
+inline constexpr std::uint32_t kNominalCrc_double = 0x9AF47557u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kNominalTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kNominalValues_double, kNominalCrc_double);
 static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
@@ -514,11 +514,11 @@ inline constexpr double kCalibrationValues_float[295] = {
     // machine.nominal.tool_length
     250.0,
     // machine.nominal.workpiece_rotation
-    -5.302876236065149e-17, 1.0, -3.0616171314629196e-17, 0.86602538824081421, 6.1232342629258393e-17, 0.5, 0.5, 0.0, -0.86602538824081421,
+    1.9229626518697845e-16, 1.0, 1.1102230246251565e-16, 0.86602538824081421, -2.2204460492503131e-16, 0.5, 0.5, 0.0, -0.86602538824081421,
     // machine.nominal.workpiece_origin
     0.0, -185.0, 1575.429443359375,
     // machine.nominal.tool_offset
-    -5.302876236065149e-17, 1.0, 1.1102230246251565e-16, 1.0, 5.302876236065149e-17, -3.0616171314629196e-17, -3.0616171314629196e-17, 1.1102230246251565e-16, -1.0,
+    1.9229626518697845e-16, 1.0, 0.0, 1.0, -1.9229626518697845e-16, 1.1102230246251565e-16, 1.1102230246251565e-16, 0.0, -1.0,
     // machine.nominal.joint_offset
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // machine.nominal.min_joint
@@ -713,7 +713,7 @@ inline constexpr double kCalibrationValues_float[295] = {
     // effects.load_direction
     -0.5, 0.0, 0.86602538824081421,
     // effects.thermal_origin
-    -627.5, 1.1327983161419676e-14, 1456.8619384765625,
+    -627.5, -4.1078251911130792e-14, 1456.8619384765625,
     // effects.reference_temperature
     20.0,
     // effects.user
@@ -725,7 +725,7 @@ inline constexpr double kCalibrationValues_float[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kCalibrationCrc_float = 0x74E007A4u;
+inline constexpr std::uint32_t kCalibrationCrc_float = 0xAD751439u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kCalibrationTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kCalibrationValues_float, kCalibrationCrc_float);
 static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_float,
@@ -745,11 +745,11 @@ inline constexpr double kNominalValues_float[295] = {
     // machine.nominal.tool_length
     250.0,
     // machine.nominal.workpiece_rotation
-    -5.302876236065149e-17, 1.0, -3.0616171314629196e-17, 0.86602538824081421, 6.1232342629258393e-17, 0.5, 0.5, 0.0, -0.86602538824081421,
+    1.9229626518697845e-16, 1.0, 1.1102230246251565e-16, 0.86602538824081421, -2.2204460492503131e-16, 0.5, 0.5, 0.0, -0.86602538824081421,
     // machine.nominal.workpiece_origin
     0.0, -185.0, 1575.429443359375,
     // machine.nominal.tool_offset
-    -5.302876236065149e-17, 1.0, 1.1102230246251565e-16, 1.0, 5.302876236065149e-17, -3.0616171314629196e-17, -3.0616171314629196e-17, 1.1102230246251565e-16, -1.0,
+    1.9229626518697845e-16, 1.0, 0.0, 1.0, -1.9229626518697845e-16, 1.1102230246251565e-16, 1.1102230246251565e-16, 0.0, -1.0,
     // machine.nominal.joint_offset
     0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // machine.nominal.min_joint
@@ -944,7 +944,7 @@ inline constexpr double kNominalValues_float[295] = {
     // effects.load_direction
     -0.5, 0.0, 0.86602538824081421,
     // effects.thermal_origin
-    -627.5, 1.1327983161419676e-14, 1456.8619384765625,
+    -627.5, -4.1078251911130792e-14, 1456.8619384765625,
     // effects.reference_temperature
     20.0,
     // effects.user
@@ -956,7 +956,7 @@ inline constexpr double kNominalValues_float[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kNominalCrc_float = 0x31EBE5DEu;
+inline constexpr std::uint32_t kNominalCrc_float = 0xE87EF643u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kNominalTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kNominalValues_float, kNominalCrc_float);
 static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,
