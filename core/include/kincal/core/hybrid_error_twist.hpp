@@ -233,7 +233,9 @@ KINCAL_TWIST_NOINLINE Scalar ups_leg_error(const Vec3<Scalar>& ur, const Vec3<Sc
   g += u.dot(t) * e[11] - u.dot(t.cross(n)) * e[12];                       // frame 2 [t, −u', n]
   g += e[21];                                                              // frame 4 [u, t3×u, t3]
   g += u.dot(z5.cross(t3)) * e[27] + u.dot(z5) * e[28];                    // frame 5 [t3, z5×t3, z5]
-  g += u.dot(z5.cross(s6)) * e[31] + u.dot(z5) * e[32] + u.dot(s6) * e[33];  // frame 6 [z5×s6, z5, s6]
+  // Frame 6 [z5×s6, z5, s6]: Δz only; its Δx, Δy act on the platform-fixed
+  // end frame Rp·[t, u_r×t, u_r] (the S centre on the platform).
+  g += u.dot(Rp * t) * e[31] + u.dot(Rp * ur.cross(t)) * e[32] + u.dot(s6) * e[33];
   return g;
 }
 

@@ -150,8 +150,14 @@ void set_links(HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& 
 
 // Folds a chain's Δη (frame 0's six if `base_error`, then five per joint)
 // into its base and links.
+// `centre_on_end`: the last joint's Δx, Δy act after its motion, on the end
+// frame (a UPS limb's S centre displaced on the platform, perpendicular to
+// the last S axis; its displacement along that axis is Δz either way) —
+// before it, they would offset the S joint's axes from one another, which a
+// ball joint cannot do (docs/hybrid-error-model.md §3).
 template <class S, int N>
-void fold_errors(HybridChainLinks<S, N>& c, const bool* prismatic, bool base_error, const S* eta) {
+void fold_errors(HybridChainLinks<S, N>& c, const bool* prismatic, bool base_error, const S* eta,
+                 bool centre_on_end = false) {
   int k = 0;
   if (base_error) {
     c.base = c.base * error_transform(eta);
@@ -160,6 +166,10 @@ void fold_errors(HybridChainLinks<S, N>& c, const bool* prismatic, bool base_err
   for (int j = 0; j < N; ++j, k += 5) {
     S d[6];
     expand_joint_error(eta + k, prismatic[j], d);
+    if (centre_on_end && j == N - 1) {
+      c.end = make_pose<S>(Mat3<S>::Identity(), Vec3<S>(d[0], d[1], S(0))) * c.end;
+      d[0] = d[1] = S(0);
+    }
     c.link[j] = c.link[j] * error_transform(d);
   }
 }
@@ -302,7 +312,7 @@ template <class S> void build_ups_limb(const HybridGeometry<S>& g, int i, const 
   limb.attach = make_pose<S>(previous.R, Vec3<S>(A6 - platform_ref));
   limb.origin = A1;
   limb.axes = previous.R;
-  if (eta != nullptr) fold_errors(limb.links, kUpsPrismatic, true, eta);
+  if (eta != nullptr) fold_errors(limb.links, kUpsPrismatic, true, eta, /*centre_on_end=*/true);
 }
 
 // The UP limb (U at A0 = Rx(θ1)·Ry(θ2), P along w with variable c − e) and

@@ -50,6 +50,7 @@ struct HybridChain {
   int first_joint = 1;       // j of the first joint (1 for limbs, 4 for the wrist)
   int joint_count = 0;
   bool base_error = true;    // frame 0 carries Δη_0 (limbs); the wrist has none
+  bool centre_on_end = false;  // UPS limbs: the last joint's Δx, Δy displace the S centre on the platform
   Pose<double> base;         // {R_0,i} in the parent frame
   std::array<bool, kMaxJoints> prismatic{};
   std::array<Pose<double>, kMaxJoints> link{};  // L_j: previous moved frame → {R_j,i}
@@ -66,6 +67,7 @@ struct HybridChainFrames {
   std::array<Pose<double>, HybridChain::kMaxJoints + 1> axis{};   // joint j's axis: z through the origin
   std::array<bool, HybridChain::kMaxJoints + 1> prismatic{};  // frame 0: false (all six kept)
   std::array<bool, HybridChain::kMaxJoints + 1> full{};       // true for frame 0: six columns
+  std::array<bool, HybridChain::kMaxJoints + 1> centre_on_end{};  // Δx, Δy act on `end` (HybridChain::centre_on_end)
   Pose<double> end;
 };
 

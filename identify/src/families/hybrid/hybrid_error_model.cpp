@@ -52,6 +52,10 @@ void chain_error_adjoints(const HybridChainFrames& frames, const Vec3<double>& P
       col += 5;
     } else {  // k = 0: (Δx, Δy, Δz, Δα, Δβ)
       A.middleCols(col, 5) = adj.leftCols<5>();
+      // Δx, Δy on the end frame (the S centre on the platform; the chain's
+      // end is that frame when it has no error of its own).
+      if (frames.centre_on_end[static_cast<std::size_t>(f)])
+        A.middleCols(col, 2) = adjoint(frames.end.R, Vec3d(frames.end.p - P)).leftCols<2>();
       col += 5;
     }
   }
@@ -80,6 +84,7 @@ HybridErrorModel::HybridErrorModel(const HybridGeometry<double>& nominal, const 
     c.first_joint = 1;
     c.joint_count = 6;
     c.base_error = true;
+    c.centre_on_end = true;
     c.prismatic = {false, false, true, false, false, false};
     const Vec3d A1 = g_.base_joints.col(i);
     const Vec3d A6 = platform_ref.p + g_.platform_joints.col(i);
@@ -195,14 +200,23 @@ HybridChainFrames HybridErrorModel::chain_frames(int ci, const Pose<double>& par
   const bool after = opt_.errors_move_with_joint;
   for (int j = 0; j < c.joint_count; ++j) {
     const bool pr = c.prismatic[static_cast<std::size_t>(j)];
+    // A UPS limb's S centre on the platform: the last joint's Δx, Δy act
+    // after its motion (core's fold_errors, centre_on_end).
+    const bool centre_after = c.centre_on_end && !after && j == c.joint_count - 1;
+    Vec6d d = Vec6d::Zero();
+    if (eta != nullptr) d = expand_joint_error(eta + k, pr);
+    Vec6d d_after = Vec6d::Zero();
+    if (centre_after) d_after.head<2>() = d.head<2>(), d.head<2>().setZero();
     T = T * c.link[static_cast<std::size_t>(j)];
-    if (eta != nullptr && !after) T = T * error_transform(expand_joint_error(eta + k, pr));
+    if (eta != nullptr && !after) T = T * error_transform(d);
     const std::size_t f = static_cast<std::size_t>(out.count++);
     out.axis[f] = T;
     out.full[f] = false;
     out.prismatic[f] = pr;
+    out.centre_on_end[f] = centre_after;
     T = T * joint_motion(pr, x[j]);
-    if (eta != nullptr && after) T = T * error_transform(expand_joint_error(eta + k, pr));
+    if (centre_after) T = T * error_transform(d_after);
+    if (eta != nullptr && after) T = T * error_transform(d);
     out.frame[f] = after ? T : out.axis[f];
     k += 5;
   }
