@@ -78,4 +78,43 @@ TEST(IndependentStewart, EachPhysicalGroupIsAbsorbedAndCompensated) {
   }
 }
 
+// The same at 1 mm / 2 mrad, every group at once and each alone (issue #31:
+// "the same at 1 mm / 2 mrad (the nonlinear model); the 6-UPS likewise").
+// The 6-UPS's model is its own nonlinear kinematics (seed 001's FK of the
+// calibrated geometry); what differs from the test above: ten times the
+// errors, another design and error draw.
+TEST(IndependentStewart, MillimetreErrorsAreAbsorbed) {
+  const std::vector<V6> cal = random_poses(60, 4111), test = random_poses(30, 4112);
+  const std::string targets_robot = robot_with_targets();
+  std::vector<std::vector<std::string>> cases = {ind::StewartErrors::group_names()};
+  for (const std::string& g : ind::StewartErrors::group_names()) cases.push_back({g});
+  for (const bool full_pose : {true, false}) {
+    ind::MeasurementSpec spec;
+    if (!full_pose) spec.targets = {{60, 0, 20}, {-30, 52, 20}, {-30, -52, 40}};
+    for (const auto& groups : cases) {
+      const ind::StewartErrors e = ind::random_stewart_errors(1.0, 2e-3, 31, groups);
+      const std::string name = std::string(full_pose ? "mm_pose_" : "mm_targets_") +
+                               (groups.size() > 1 ? std::string("all") : groups[0]);
+      const ind::HeldOut h = ind::identify_and_compensate(
+          kDir, full_pose ? "stewart-seed001" : targets_robot, name, ind::StewartSimulator(e),
+          ind::make_stewart_dataset(e, cal, spec), test, full_pose ? nullptr : &spec.targets);
+      std::printf("  %-30s held-out RMS %.4f um, worst %.4f um, %.4f urad, targets %.4f um (%d poses)\n",
+                  name.c_str(), h.rms_um, h.position_um, h.rotation_urad, h.target_um, h.poses);
+      EXPECT_EQ(h.poses, int(test.size())) << name;
+      // Leg offsets (the prismatic line beside the U centre) have no
+      // parameter in seed 001's 42: to first order the others absorb them
+      // (the test above), at 1 mm they leave 0.15 µm / 0.90 µrad from full
+      // poses and 0.18 µm at the targets (0.23 µm with every group) — issue
+      // #31's open part for the 6-UPS, held here to twice what it measures.
+      const bool leg_offsets = groups.size() > 1 || groups[0] == "leg_offsets";
+      if (full_pose) {
+        EXPECT_LE(h.position_um, leg_offsets ? 0.31 : 0.05) << name;
+        EXPECT_LE(h.rotation_urad, leg_offsets ? 1.8 : 0.2) << name;
+      } else {
+        EXPECT_LE(h.target_um, leg_offsets ? 0.46 : 0.05) << name;
+      }
+    }
+  }
+}
+
 }  // namespace

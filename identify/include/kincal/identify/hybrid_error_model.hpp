@@ -109,10 +109,8 @@ class HybridErrorModel {
   // limb 4; issue #31: without it nothing after the last joint could be
   // identified). 156 in all. It comes last so that the first 150 keep seed
   // 000's order and a model written before it reads the same. The UPS
-  // limbs' ends (the S centres on the platform) need no frame of their own:
-  // their S joint's Δη_4..6 and Δξ span them (docs/hybrid-error-model.md §3;
-  // an attachment frame tried beside them made the effect fits wander,
-  // dy_5_1 = 12 mm, for 0.1 µm less on held-out poses).
+  // limbs' S centres on the platform are joint 6's Δx, Δy (after its motion)
+  // and Δz (docs/hybrid-error-model.md §1, §3).
   static constexpr int kEncoderCount = 6;
   static constexpr int kSeedParameterCount = 150;
   static constexpr int kEndFrameCount = 6;
@@ -128,6 +126,17 @@ class HybridErrorModel {
   const std::vector<HybridErrorParameter>& parameters() const { return params_; }
   int size() const { return kParameterCount; }
   int index_of(std::string_view name) const;  // −1 if unknown
+  // Columns the column selection tries after all others and keeps only
+  // where the design tells them from those (distance ≥ kTriedLastTolerance):
+  // the tool frame, and in each UPS limb Δη_5's translations — offsets
+  // between the S joint's axes, which a ball joint does not have, nearly
+  // collinear over a workspace with the S centre on the platform (Δz_5,i
+  // with Δy_6,i; docs/hybrid-error-model.md §3).
+  bool tried_last(int k) const;
+  static constexpr double kTriedLastTolerance = 0.03;
+  // `columns` (indices into Δχ) with the tried_last ones moved to the end,
+  // each group in its own order.
+  std::vector<Eigen::Index> selection_order(std::vector<Eigen::Index> columns) const;
   // Chains: 0–2 the UPS limbs, 3 the UP limb, 4 the wrist. Their Δη (the
   // `eta` of chain_frames) start at chain(c).first_parameter; the end frames
   // at end_frame_index(c).

@@ -301,6 +301,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     else
       zero_cols.push_back(j);
   }
+  eta_cols = model.selection_order(eta_cols);
   MatrixXd Hsel(H.rows(), static_cast<Index>(xi_cols.size() + eta_cols.size()));
   std::vector<std::string> sel_names;
   std::vector<Index> sel_map, sel_xi, sel_eta;
@@ -324,12 +325,14 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // poses tilted ±0.1 rad they lie 0.044 and 0.068 away, and held there an
   // independently simulated tool error (0.1 mm / 0.3 mrad) was left 0.41 µm
   // RMS instead of 0. Held, it is named among the dropped.
-  constexpr double kToolFrameTolerance = 0.03;
+  // The UPS limbs' Δη_5 translations (offsets between the S joint's axes)
+  // are tried last and held the same way (HybridErrorModel::tried_last).
+  constexpr double kToolFrameTolerance = HybridErrorModel::kTriedLastTolerance;
   std::vector<double> distance(sel_map.size(), HUGE_VAL);  // per Hsel column; ξ columns are never tested
   for (std::size_t e = 0; e < sel_eta.size(); ++e) distance[static_cast<std::size_t>(sel_eta[e])] = sel.distance[e];
   for (Index c : sel.kept) {
     const Index j = sel_map[static_cast<std::size_t>(c)];
-    const bool held = j >= HybridErrorModel::kSeedParameterCount && distance[static_cast<std::size_t>(c)] < kToolFrameTolerance;
+    const bool held = model.tried_last(int(j)) && distance[static_cast<std::size_t>(c)] < kToolFrameTolerance;
     (held ? out.dropped : out.kept).push_back(j);
   }
   for (Index c : sel.dropped) out.dropped.push_back(sel_map[static_cast<std::size_t>(c)]);

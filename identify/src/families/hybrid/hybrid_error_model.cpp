@@ -182,6 +182,18 @@ int HybridErrorModel::index_of(std::string_view name) const {
   return -1;
 }
 
+bool HybridErrorModel::tried_last(int k) const {
+  if (k < 0 || k >= kParameterCount) return false;
+  if (k >= kSeedParameterCount) return true;  // the tool frame
+  const HybridErrorParameter& p = params_[static_cast<std::size_t>(k)];
+  return p.limb <= kUps && p.frame == 5 && p.component < 3;
+}
+
+std::vector<Eigen::Index> HybridErrorModel::selection_order(std::vector<Eigen::Index> columns) const {
+  std::stable_partition(columns.begin(), columns.end(), [this](Eigen::Index k) { return !tried_last(int(k)); });
+  return columns;
+}
+
 HybridChainFrames HybridErrorModel::chain_frames(int ci, const Pose<double>& parent, const double* x,
                                                  const double* eta, const double* end_eta) const {
   const HybridChain& c = chains_[static_cast<std::size_t>(ci)];

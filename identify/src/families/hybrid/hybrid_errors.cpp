@@ -110,6 +110,7 @@ class HybridErrors final : public FamilyErrors {
     const double largest = start.leftCols(layout.family).colwise().norm().maxCoeff();
     for (Eigen::Index j = 0; j < layout.family; ++j)
       (start.col(j).norm() > 1e-9 * largest ? eta : idle).push_back(j);
+    eta = model_.selection_order(eta);
     ColumnSelection selection;
     try {
       selection = reconstruct_by_column_selection(start, xi, eta, {}, tolerance);
@@ -119,6 +120,7 @@ class HybridErrors final : public FamilyErrors {
     }
     std::vector<Eigen::Index> held = selection.dropped;
     held.insert(held.end(), idle.begin(), idle.end());
+    hold_tried_last(eta, selection, held);
     Eigen::MatrixXd C = Eigen::MatrixXd::Zero(Eigen::Index(held.size()), layout.size());
     for (std::size_t r = 0; r < held.size(); ++r) C(Eigen::Index(r), held[r]) = 1.0;
     return C;
@@ -137,7 +139,13 @@ class HybridErrors final : public FamilyErrors {
       if (H.col(j).norm() > 1e-9 * largest) eta.push_back(j);
     std::vector<std::string> base = names();
     base.resize(std::size_t(H.cols()));
-    std::vector<Eigen::Index> keep = reconstruct_by_column_selection(H, xi, eta, base, 1e-4).kept;
+    eta = model_.selection_order(eta);
+    const ColumnSelection selection = reconstruct_by_column_selection(H, xi, eta, base, 1e-4);
+    std::vector<Eigen::Index> held;
+    hold_tried_last(eta, selection, held);
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index j : selection.kept)
+      if (std::find(held.begin(), held.end(), j) == held.end()) keep.push_back(j);
     std::sort(keep.begin(), keep.end());
     return keep;
   }
@@ -148,6 +156,18 @@ class HybridErrors final : public FamilyErrors {
   }
 
  private:
+  // The tried-last columns (the tool frame, the UPS limbs' Δη_5
+  // translations) the selection kept closer than kTriedLastTolerance to
+  // those before them, appended to `held` (docs/hybrid-error-model.md §3).
+  void hold_tried_last(const std::vector<Eigen::Index>& eta, const ColumnSelection& selection,
+                       std::vector<Eigen::Index>& held) const {
+    for (std::size_t e = 0; e < eta.size() && e < selection.distance.size(); ++e) {
+      const Eigen::Index j = eta[e];
+      if (!model_.tried_last(int(j)) || !(selection.distance[e] < HybridErrorModel::kTriedLastTolerance)) continue;
+      if (std::find(selection.kept.begin(), selection.kept.end(), j) != selection.kept.end()) held.push_back(j);
+    }
+  }
+
   HybridGeometry<double> g_;
   HybridErrorModel model_;
   mutable Eigen::VectorXd cached_errors_;  // the errors chains_ were built from
