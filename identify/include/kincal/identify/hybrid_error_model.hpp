@@ -134,6 +134,10 @@ class HybridErrorModel {
   // with Δy_6,i; docs/hybrid-error-model.md §3).
   bool tried_last(int k) const;
   static constexpr double kTriedLastTolerance = 0.03;
+  // Whether column k, kept by a selection at `distance` from the span of
+  // those before it, is held all the same (tried_last and nearer than
+  // kTriedLastTolerance): the rule every hybrid column selection applies.
+  bool held_as_tried_last(int k, double distance) const { return tried_last(k) && distance < kTriedLastTolerance; }
   // `columns` (indices into Δχ) with the tried_last ones moved to the end,
   // each group in its own order.
   std::vector<Eigen::Index> selection_order(std::vector<Eigen::Index> columns) const;

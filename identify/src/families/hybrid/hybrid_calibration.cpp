@@ -317,7 +317,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
       reconstruct_by_column_selection(Hsel, sel_xi, sel_eta, sel_names, options.selection_tolerance);
   // The tool frame (issue #31; last in the order) is kept only where the
   // design tells it from the wrist's own errors: its unit column at least
-  // kToolFrameTolerance from the span of those kept before it. On seed 000's
+  // kTriedLastTolerance from the span of those kept before it. On seed 000's
   // constant-orientation layers its two rotations the gauge sees lie 0.0031
   // (dbeta_7_4) and 0.021 (dgamma_7_4) from Δη_6,4's; kept there, with noise,
   // they cost the effect fits 1.6× (backlash compensated 2.67 µm against a
@@ -326,13 +326,13 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   // independently simulated tool error (0.1 mm / 0.3 mrad) was left 0.41 µm
   // RMS instead of 0. Held, it is named among the dropped.
   // The UPS limbs' Δη_5 translations (offsets between the S joint's axes)
-  // are tried last and held the same way (HybridErrorModel::tried_last).
-  constexpr double kToolFrameTolerance = HybridErrorModel::kTriedLastTolerance;
+  // are tried last and held the same way (HybridErrorModel::tried_last; the
+  // tolerance is its kTriedLastTolerance).
   std::vector<double> distance(sel_map.size(), HUGE_VAL);  // per Hsel column; ξ columns are never tested
   for (std::size_t e = 0; e < sel_eta.size(); ++e) distance[static_cast<std::size_t>(sel_eta[e])] = sel.distance[e];
   for (Index c : sel.kept) {
     const Index j = sel_map[static_cast<std::size_t>(c)];
-    const bool held = model.tried_last(int(j)) && distance[static_cast<std::size_t>(c)] < kToolFrameTolerance;
+    const bool held = model.held_as_tried_last(int(j), distance[static_cast<std::size_t>(c)]);
     (held ? out.dropped : out.kept).push_back(j);
   }
   for (Index c : sel.dropped) out.dropped.push_back(sel_map[static_cast<std::size_t>(c)]);

@@ -163,7 +163,7 @@ class HybridErrors final : public FamilyErrors {
                        std::vector<Eigen::Index>& held) const {
     for (std::size_t e = 0; e < eta.size() && e < selection.distance.size(); ++e) {
       const Eigen::Index j = eta[e];
-      if (!model_.tried_last(int(j)) || !(selection.distance[e] < HybridErrorModel::kTriedLastTolerance)) continue;
+      if (!model_.held_as_tried_last(int(j), selection.distance[e])) continue;
       if (std::find(selection.kept.begin(), selection.kept.end(), j) != selection.kept.end()) held.push_back(j);
     }
   }
