@@ -50,6 +50,19 @@
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/core/stewart.hpp"
 
+// Whether the hybrid compensator stores the identified machine's chains
+// (3.5 KiB in double, built once when the table is loaded) or builds each
+// chain per point from the table's numbers (no RAM beyond the stack). On by
+// default on the host, off in firmware (port/baremetal defines
+// KINCAL_FIRMWARE); a controller with the RAM to spare may define it to 1.
+#ifndef KINCAL_HYBRID_STORED_CHAINS
+#if defined(KINCAL_FIRMWARE) && KINCAL_FIRMWARE
+#define KINCAL_HYBRID_STORED_CHAINS 0
+#else
+#define KINCAL_HYBRID_STORED_CHAINS 1
+#endif
+#endif
+
 #if defined(__GNUC__)
 #define KINCAL_NOINLINE __attribute__((noinline))
 // Not inlined itself, but everything it calls is: the IK below is compiled
@@ -144,13 +157,18 @@ template <class S> struct Model<HybridMachine<S>> {
   HybridGeometry<S> nominal;     // q_nom, the singularity test; the exact IK's start
   HybridGeometry<S> controller;  // nominal with joint_offset += ξ̂: the ideal IK when Δχ̂ = 0
   // The identified machine's numbers, read in place from the table (which
-  // outlives the compensator): the exact IK builds each chain from them
-  // where it needs it (hybrid_exact.hpp; stored, the chains are 3.5 KiB of
-  // doubles a controller's static RAM does not have).
+  // outlives the compensator): a controller's exact IK builds each chain
+  // from them where it needs it (hybrid_exact.hpp; stored, the chains are
+  // 3.5 KiB of doubles its static RAM does not have). A host build stores
+  // them once here instead (KINCAL_HYBRID_STORED_CHAINS), which takes the
+  // building — two fifths of a point's instructions — off every point.
   const S* source_errors = nullptr;    // Δχ̂
   const S* encoder_offsets = nullptr;  // ξ̂
   S up_split = S(345);
   bool structural = false;  // any Δχ̂ ≠ 0: the exact IK
+#if KINCAL_HYBRID_STORED_CHAINS
+  HybridChains<S> chains;
+#endif
   bool load(const HybridMachine<S>& m) {
     nominal = to_core(m.nominal);
     controller = nominal;
@@ -160,7 +178,12 @@ template <class S> struct Model<HybridMachine<S>> {
     up_split = m.up_split;
     structural = false;
     for (int k = 0; k < kHybridSourceErrorCount; ++k) structural = structural || m.source_errors[k] != S(0);
-    return finite_source_errors(m.source_errors, m.encoder_offsets);
+    if (!finite_source_errors(m.source_errors, m.encoder_offsets)) return false;
+#if KINCAL_HYBRID_STORED_CHAINS
+    if (structural && hybrid_exact_chains(nominal, up_split, source_errors, chains, encoder_offsets) != Status::Ok)
+      return false;
+#endif
+    return true;
   }
 };
 
@@ -373,9 +396,14 @@ template <class Machine> class Compensator {
     if constexpr (family == MachineFamily::Hybrid) {
       // The identified machine's exact IK (issue #31); with no structural
       // error it is seed 000 Fig. 4's ideal IK with ξ̂.
-      if (model_.structural)
+      if (model_.structural) {
+#if KINCAL_HYBRID_STORED_CHAINS
+        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal));
+#else
         return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.up_split, model_.source_errors,
                                                       model_.encoder_offsets, target, ideal));
+#endif
+      }
     }
     return solve_closed_form(target, ideal);
   }

@@ -115,11 +115,18 @@ template <class S> Pose<S> joint_motion(bool prismatic, S x) {
   return make_pose<S>(rotation_about(2, x), Vec3<S>::Zero());
 }
 
-// E = Trans(Δx, Δy, Δz)·Rx(Δα)·Ry(Δβ)·Rz(Δγ) (Appendix A; d = (Δx … Δγ)).
+// E = Trans(Δx, Δy, Δz)·Rx(Δα)·Ry(Δβ)·Rz(Δγ) (Appendix A; d = (Δx … Δγ)),
+// the product written out (no 3×3 products), and no sin / cos of an angle
+// that is exactly zero (every joint frame has one: Δγ of a revolute).
 template <class S> Pose<S> error_transform(const S* d) {
-  Mat3<S> R = rotation_about(0, d[3]);
-  R = R * rotation_about(1, d[4]);
-  R = R * rotation_about(2, d[5]);
+  S sa(0), ca(1), sb(0), cb(1), sg(0), cg(1);
+  if (d[3] != S(0)) sin_cos(d[3], sa, ca);
+  if (d[4] != S(0)) sin_cos(d[4], sb, cb);
+  if (d[5] != S(0)) sin_cos(d[5], sg, cg);
+  Mat3<S> R;
+  R << cb * cg, -cb * sg, sb,                           //
+      ca * sg + sa * sb * cg, ca * cg - sa * sb * sg, -sa * cb,  //
+      sa * sg - ca * sb * cg, sa * cg + ca * sb * sg, ca * cb;
   return make_pose<S>(R, Vec3<S>(d[0], d[1], d[2]));
 }
 

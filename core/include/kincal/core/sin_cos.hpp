@@ -38,9 +38,13 @@ template <class S> bool sin_cos(S a, S& sine, S& cosine) {
     a *= S(0.5);
     ++halvings;
   }
+  // The series' divisions as products by their reciprocals: a division costs
+  // ten or more multiplications on both targets, and 1/n rounded differs from
+  // the quotient by less than the series' own last term.
   const S t = a * a;
-  S s = a * (S(1) - t / S(6) * (S(1) - t / S(20) * (S(1) - t / S(42) * (S(1) - t / S(72)))));
-  S c = S(1) - t / S(2) * (S(1) - t / S(12) * (S(1) - t / S(30) * (S(1) - t / S(56) * (S(1) - t / S(90)))));
+  S s = a * (S(1) - t * S(1.0 / 6) * (S(1) - t * S(1.0 / 20) * (S(1) - t * S(1.0 / 42) * (S(1) - t * S(1.0 / 72)))));
+  S c = S(1) - t * S(0.5) *
+                   (S(1) - t * S(1.0 / 12) * (S(1) - t * S(1.0 / 30) * (S(1) - t * S(1.0 / 56) * (S(1) - t * S(1.0 / 90)))));
   for (int k = 0; k < halvings; ++k) {
     const S s2 = S(2) * s * c;
     c = S(1) - S(2) * s * s;
