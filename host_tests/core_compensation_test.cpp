@@ -111,7 +111,7 @@ constexpr Crc32 crc_of(const char* s) {
   return c;
 }
 static_assert(crc_of("123456789").value() == 0xCBF43926u, "CRC-32/IEEE check value");
-static_assert(table_value_count<StewartMachine<double>>() == 200, "6-UPS table layout");
+static_assert(table_value_count<StewartMachine<double>>() == 212, "6-UPS table layout (leg_offset_sq: 12 more)");
 static_assert(table_value_count<HybridMachine<double>>() == 295, "hybrid table layout (156 source errors)");
 
 // What a generated header does: values, the CRC as a literal, static_assert.

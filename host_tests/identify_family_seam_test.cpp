@@ -186,9 +186,19 @@ TEST_P(FamilySeam, ErrorTwistsMatchFiniteDifferencesOfTheFamilysOwnPose) {
 
 TEST_P(FamilySeam, ParameterNamesAreUniqueWithUnitsAndSymmetricAliases) {
   std::set<std::string> names;
-  for (const ki::ParameterSpec& s : family.parameter_specs()) {
+  for (const ki::ParameterSpec& s : family.parameter_specs(robot)) {
     EXPECT_TRUE(names.insert(s.name).second) << "twice: " << s.name;
     EXPECT_TRUE(std::string(s.unit) == "mm" || std::string(s.unit) == "rad") << s.name;
+  }
+  if (robot.is_stewart()) {  // with the key leg_offset_sq: six more, in mm² (squared leg-line offsets)
+    ki::Robot with_legs = robot;
+    with_legs.models_leg_offsets = true;
+    const std::vector<ki::ParameterSpec>& specs = family.parameter_specs(with_legs);
+    ASSERT_EQ(specs.size(), family.parameter_specs(robot).size() + 6);
+    for (std::size_t k = specs.size() - 6; k < specs.size(); ++k) {
+      EXPECT_TRUE(names.insert(specs[k].name).second) << "twice: " << specs[k].name;
+      EXPECT_EQ(std::string(specs[k].unit), "mm2") << specs[k].name;
+    }
   }
   for (const std::string& name : names) {
     const std::string alias = family.alias_of(name);

@@ -357,3 +357,25 @@ TEST(LinuxCncExport, RefusesAHybridModelAndAnExistingDirectory) {
 }
 
 }  // namespace
+
+namespace {
+// A model with leg lines beside their U centres (robot key leg_offset_sq):
+// genhexkins has no parameter for them, so the export refuses the model with
+// the leg and the key named, instead of writing files that would leave the
+// offset's √(D² − o²) uncompensated. All zeros: exported as before.
+TEST(LinuxCncExport, RefusesALegLineOffsetItCannotCarry) {
+  ki::CalibrationModel model = model_with_errors(0.2, 11, false);
+  model.nominal.models_leg_offsets = true;
+  model.source_file = "legs.json";
+  EXPECT_NO_THROW((void)ki::linuxcnc_export(model));
+  model.parameters.push_back({"dsq4", 0.8, 0.0, true});
+  try {
+    (void)ki::linuxcnc_export(model);
+    FAIL() << "a model with a leg-line offset was exported";
+  } catch (const ki::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("leg 4"), std::string::npos) << what;
+    EXPECT_NE(what.find("leg_offset_sq"), std::string::npos) << what;
+  }
+}
+}  // namespace

@@ -416,9 +416,12 @@ int run_identify_stewart(const IdentifyArgs& a, const ki::Robot& robot) {
   if (ki::uses_target_model(robot, data)) return run_identify_targets(a, robot, data);
   ki::StewartCalibrationOptions so;
   so.estimator = estimator_options(a, estimator);
-  std::cout << "identify: " << a.data << ", robot " << robot.name << " (42-parameter model of seed 001)\n";
+  const int parameters = ki::stewart_parameter_count(robot);
+  std::cout << "identify: " << a.data << ", robot " << robot.name << " (" << parameters << "-parameter model of seed 001"
+            << (robot.models_leg_offsets ? " with leg offsets dsq1..dsq6" : "") << ")\n";
   const ki::StewartCalibration c = ki::calibrate_stewart(robot, data, so);
-  std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of 42, condition number (column-scaled) "
+  std::cout << "  cal nodes " << c.nodes << ", rank " << c.rank << " of " << parameters
+            << ", condition number (column-scaled) "
             << c.condition_number << "\n  estimator " << describe_estimate(c.fit, so.estimator)
             << "\n  iteration   max dQ_int (mm+rad)   rms |dp| (um)   |step| (mm)\n";
   for (const ki::StewartIteration& h : c.history) {
@@ -450,7 +453,7 @@ int run_identify_stewart(const IdentifyArgs& a, const ki::Robot& robot) {
     j["estimator"] = estimator;
     j["estimator_settings"] = ki::estimator_settings(used.fit, used.estimator);
     j["rank"] = used.rank;
-    j["parameters"] = 42;
+    j["parameters"] = parameters;
     j["dropped"] = nlohmann::json::array();
     j["condition_number"] = used.condition_number;
     j["sigma_um"] = 1e3 * used.sigma_mm;

@@ -125,7 +125,7 @@ class Family {
 
   // ---- the error model
   // The family's names for simulate --errors and MODEL.json, in table order.
-  virtual const std::vector<ParameterSpec>& parameter_specs() const = 0;
+  virtual const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) const = 0;
   // The same error under another name (the hybrid's encoder offsets have
   // two), else empty.
   virtual std::string alias_of(const std::string&) const { return {}; }

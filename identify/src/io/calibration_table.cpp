@@ -149,6 +149,12 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
               why = "leg offset dl" + std::to_string(i + 1) + " = " + number(dl) + " above the correction bound " +
                     number(cap[i]) + key_note("max_correction");
           }
+          for (int i = 0; i < 6 && why.empty(); ++i) {
+            const double ds = m.calibrated.leg_offset_sq[i] - m.nominal.leg_offset_sq[i];
+            if (!(std::abs(ds) <= l.max_geometry_error * l.max_geometry_error))
+              why = "squared leg line offset dsq" + std::to_string(i + 1) + " = " + number(ds) + " mm2 above max_geometry_error^2 " +
+                    number(l.max_geometry_error * l.max_geometry_error) + key_note("max_geometry_error");
+          }
         }
         return why;
       },

@@ -243,6 +243,16 @@ LinuxCncExport linuxcnc_export(const CalibrationModel& model, const LinuxCncExpo
   const double unit = options.inch ? 1.0 / kMmPerInch : 1.0;  // mm → export units
   const Robot& nominal = model.nominal;
   const StewartGeometry<double> cal = calibrated_robot(model).stewart();
+  // genhexkins's joint is the distance between a leg's joints; with a leg
+  // line beside its U centre the actuator is at √(D² − s) instead
+  // (core/stewart.hpp), which this export does not write yet.
+  for (int i = 0; i < 6; ++i)
+    if (cal.leg_offset_sq(i) != 0)
+      throw InputError(file, 0, 0,
+                       "leg " + std::to_string(i + 1) + " has a leg line offset (leg_offset_sq = " +
+                           general(cal.leg_offset_sq(i)) +
+                           " mm2), which LinuxCNC's genhexkins has no parameter for; this export does not carry it "
+                           "yet (compensate with `kincal compensate` or the firmware table)");
 
   LinuxCncExport out;
   for (const auto& [name, v] : model.effects.values) {

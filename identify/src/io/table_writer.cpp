@@ -29,7 +29,7 @@ namespace {
 using Groups = std::vector<std::pair<std::string, int>>;
 
 void add_stewart_geometry(Groups& g, const std::string& p) {
-  for (const auto& [name, n] : Groups{{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"min_length", 6},
+  for (const auto& [name, n] : Groups{{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"leg_offset_sq", 6}, {"min_length", 6},
                                       {"max_length", 6}, {"home_rotation", 9}, {"home_position", 3},
                                       {"characteristic_length", 1}})
     g.emplace_back(p + name, n);

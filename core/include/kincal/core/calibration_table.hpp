@@ -55,7 +55,7 @@
 namespace kincal {
 
 // Bumped whenever the layout or the meaning of a table value changes.
-inline constexpr std::uint32_t kCalibrationTableVersion = 2;  // 2: effects.user
+inline constexpr std::uint32_t kCalibrationTableVersion = 3;  // 2: effects.user; 3: the 6-UPS leg_offset_sq
 
 enum class MachineFamily : std::uint8_t {
   Stewart6Ups = 1,  // stewart-6ups (seed 001)
@@ -80,6 +80,7 @@ template <class Scalar> struct StewartGeometryTable {
   Scalar base[18];           // B_i, base frame, mm
   Scalar platform[18];       // P_i, platform frame, mm
   Scalar length_offset[6];   // l_i − q_i, mm
+  Scalar leg_offset_sq[6];   // s_i, mm²: l_i = √(|L_i|² − s_i) (core/stewart.hpp)
   Scalar min_length[6];      // stroke on q, mm
   Scalar max_length[6];
   Scalar home_rotation[9];   // FK's default start pose, R column-major
@@ -91,6 +92,7 @@ template <class Scalar> struct StewartGeometryTable {
     each(s.base, f);
     each(s.platform, f);
     each(s.length_offset, f);
+    each(s.leg_offset_sq, f);
     each(s.min_length, f);
     each(s.max_length, f);
     each(s.home_rotation, f);
@@ -453,6 +455,7 @@ template <class Scalar> StewartGeometry<Scalar> to_core(const StewartGeometryTab
   g.base = get<Scalar, 3, 6>(t.base);
   g.platform = get<Scalar, 3, 6>(t.platform);
   g.length_offset = get<Scalar, 6, 1>(t.length_offset);
+  g.leg_offset_sq = get<Scalar, 6, 1>(t.leg_offset_sq);
   g.min_length = get<Scalar, 6, 1>(t.min_length);
   g.max_length = get<Scalar, 6, 1>(t.max_length);
   g.home.R = get<Scalar, 3, 3>(t.home_rotation);
@@ -467,6 +470,7 @@ template <class Scalar> StewartGeometryTable<Scalar> to_table(const StewartGeome
   put(g.base, t.base);
   put(g.platform, t.platform);
   put(g.length_offset, t.length_offset);
+  put(g.leg_offset_sq, t.leg_offset_sq);
   put(g.min_length, t.min_length);
   put(g.max_length, t.max_length);
   put(g.home.R, t.home_rotation);

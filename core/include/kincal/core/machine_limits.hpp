@@ -119,6 +119,12 @@ constexpr bool machine_inside(const StewartMachine<Scalar>& m, const TableBounds
   // offsets: each within the correction bound.
   for (int i = 0; i < 6; ++i)
     if (!within(m.calibrated.length_offset[i] - m.nominal.length_offset[i], b.max_correction[i])) return false;
+  // A leg's line within max_geometry_error of its U centre: s_i = o_i² (mm²)
+  // within its square.
+  for (int i = 0; i < 6; ++i)
+    if (!within(m.calibrated.leg_offset_sq[i] - m.nominal.leg_offset_sq[i],
+                l.max_geometry_error * l.max_geometry_error))
+      return false;
   return true;
 }
 

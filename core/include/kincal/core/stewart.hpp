@@ -7,6 +7,16 @@
 // The actuator reports q_i; the physical leg is l_i = q_i + length_offset_i,
 // which is how seed 001's dl_i (Table 3) enters: a zero / encoder offset of the
 // leg length. Nominal machines have length_offset = 0.
+//
+// Leg offsets (issue #31, not in seed 001's 42 parameters): a leg whose
+// prismatic line passes at a distance o_i beside its U centre, the S centre
+// on that line, keeps |L_i|² = l_i² + o_i² (the U centre, the line's foot and
+// the S centre form a right angle), so
+//   l_i = √(|L_i|² − s_i),  s_i = o_i² = leg_offset_sq_i (mm²).
+// The square is the parameter because |L_i| depends on o_i only through it
+// (and so the identification is linear in it where o_i = 0: ∂l/∂o vanishes
+// there). 0 for every machine that does not model them: then l_i = |L_i| to
+// the last bit.
 #pragma once
 
 #include "kincal/core/pose.hpp"
@@ -19,6 +29,7 @@ template <class Scalar> struct StewartGeometry {
   Eigen::Matrix<Scalar, 3, 6> base;      // B_i, base frame, mm
   Eigen::Matrix<Scalar, 3, 6> platform;  // P_i, platform frame, mm
   Vec6<Scalar> length_offset = Vec6<Scalar>::Zero();  // l_i − q_i, mm
+  Vec6<Scalar> leg_offset_sq = Vec6<Scalar>::Zero();  // s_i: squared distance of leg i's line from its U centre, mm²
   Vec6<Scalar> min_length = Vec6<Scalar>::Constant(Scalar(0));  // actuator stroke on q, mm
   Vec6<Scalar> max_length = Vec6<Scalar>::Constant(Scalar(1e9));
   Pose<Scalar> home;  // FK's default starting pose
@@ -32,6 +43,7 @@ template <class Scalar> struct StewartGeometry {
     g.base = base.template cast<Other>();
     g.platform = platform.template cast<Other>();
     g.length_offset = length_offset.template cast<Other>();
+    g.leg_offset_sq = leg_offset_sq.template cast<Other>();
     g.min_length = min_length.template cast<Other>();
     g.max_length = max_length.template cast<Other>();
     g.home = home.template cast<Other>();
@@ -102,13 +114,24 @@ Status stewart_ik(const StewartGeometry<Scalar>& g, const Pose<Scalar>& pose, Ve
   legs.colwise() += pose.p;
   for (int i = 0; i < 6; ++i)
     if (!(legs(2, i) > Scalar(0))) return Status::Unreachable;
-  const Vec6<Scalar> lengths = legs.colwise().norm().transpose();
+  const Vec6<Scalar> distances = legs.colwise().norm().transpose();  // |L_i|
+  // l_i = √(|L_i|² − s_i): a leg shorter than its offset cannot reach (the
+  // squared norm, not the norm squared, so s = 0 gives |L_i| exactly).
+  Vec6<Scalar> lengths;
+  for (int i = 0; i < 6; ++i) {
+    const Scalar squared = legs.col(i).squaredNorm() - g.leg_offset_sq(i);
+    if (!(squared > Scalar(0))) return squared == squared ? Status::Unreachable : Status::InvalidInput;
+    lengths(i) = g.leg_offset_sq(i) == Scalar(0) ? distances(i) : Scalar(std::sqrt(squared));
+  }
   const Vec6<Scalar> cmd = lengths - g.length_offset;
   if (!all_finite(cmd)) return Status::InvalidInput;
   if ((cmd.array() < g.min_length.array()).any() || (cmd.array() > g.max_length.array()).any())
     return Status::OutOfLimits;
   if (jacobian != nullptr) {
-    const Mat6<Scalar> J = stewart_jacobian(arms, legs, lengths);
+    // ∂l_i = (|L_i| / l_i)·∂|L_i|: row i of the distances' Jacobian scaled.
+    Mat6<Scalar> J = stewart_jacobian(arms, legs, distances);
+    for (int i = 0; i < 6; ++i)
+      if (g.leg_offset_sq(i) != Scalar(0)) J.row(i) *= distances(i) / lengths(i);
     SmallLu<Scalar, 6> lu;
     if (!factor_regular(lu, scale_angular_columns(J, g.characteristic_length))) return Status::Singular;
     *jacobian = J;
@@ -193,7 +216,18 @@ FkReport<Scalar> stewart_fk(const StewartGeometry<Scalar>& g, const Vec6<Scalar>
     report.status = Status::OutOfLimits;
     return report;
   }
-  const Vec6<Scalar> target = q + g.length_offset;
+  const Vec6<Scalar> lengths = q + g.length_offset;
+  // The platform joints' distances from the base joints: √(l_i² + s_i).
+  Vec6<Scalar> target = lengths;
+  for (int i = 0; i < 6; ++i)
+    if (g.leg_offset_sq(i) != Scalar(0)) {
+      const Scalar squared = lengths(i) * lengths(i) + g.leg_offset_sq(i);
+      if (!(squared > Scalar(0))) {
+        report.status = squared == squared ? Status::Unreachable : Status::InvalidInput;
+        return report;
+      }
+      target(i) = Scalar(std::sqrt(squared));
+    }
   return six_distance_fk(g.base, g.platform, target, g.characteristic_length,
                          options.relative_residual * target.cwiseAbs().maxCoeff(), options.max_iterations, guess, pose);
 }

@@ -74,6 +74,11 @@ struct Robot {
   // tool (hybrid, tool frame), mm. Empty = none given; the hybrid is then
   // measured by seed 000's three-target gauge (gauge_radius).
   std::vector<Vec3<double>> targets;
+  // 6-UPS only: the optional description key `leg_offset_sq` (mm², six: the
+  // squared distance of each leg's prismatic line from its U centre,
+  // core/stewart.hpp). Given, even as zeros, the identification also fits
+  // the six (dsq1..dsq6, after seed 001's 42); absent, they are not modelled.
+  bool models_leg_offsets = false;
 
   bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
   bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }

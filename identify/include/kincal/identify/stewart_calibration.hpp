@@ -20,17 +20,24 @@
 namespace kincal::identify {
 
 constexpr int kStewartParameterCount = 42;  // per leg: dXB, dYB, dZB, dl, dXP, dYP, dZP
+// With the description key leg_offset_sq: then dsq1..dsq6 (core/stewart.hpp).
+constexpr int kStewartLegOffsetParameterCount = kStewartParameterCount + 6;
+int stewart_parameter_count(const Robot& robot);
 
-using StewartErrorJacobian = Eigen::Matrix<double, 6, kStewartParameterCount>;
+using StewartErrorJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kStewartLegOffsetParameterCount>;
 
 // Linearised error model at a pose of geometry g: the pose error twist
 // (v, ω) of the platform (core/pose.hpp convention) per unit parameter error,
 // with the commanded leg lengths held. From seed 001 Eq. (9), J·dQ = B, with
 // the platform twist in place of dQ: row block of leg i is
 //   J⁻¹·e_i · [u_iᵀ, 1, −(Rᵀu_i)ᵀ]   for (dB_i, dl_i, dP_i).
-StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose);
+// With leg offsets (`leg_offsets`: 48 columns, the six dsq_i last) the
+// distance |L_i| = √(l_i² + s_i) moves by (l_i/|L_i|)·dl_i and ds_i/(2|L_i|):
+// the dl column scaled by l_i/|L_i| (1 when s_i = 0), the dsq column J⁻¹·e_i/(2|L_i|).
+StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose,
+                                            bool leg_offsets = false);
 
-// nominal + θ (θ in the order of the parameter table: dXB1 dYB1 dZB1 dl1 dXP1 dYP1 dZP1 …).
+// nominal + θ (θ in the order of the parameter table: dXB1 dYB1 dZB1 dl1 dXP1 dYP1 dZP1 …, then dsq1..dsq6 if given).
 StewartGeometry<double> stewart_with_errors(const StewartGeometry<double>& nominal, const Eigen::VectorXd& theta);
 
 struct StewartIteration {

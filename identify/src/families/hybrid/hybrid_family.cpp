@@ -261,7 +261,7 @@ class HybridActual final : public ActualMachine {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& HybridFamily::parameter_specs() const {
+const std::vector<ParameterSpec>& HybridFamily::parameter_specs(const Robot&) const {
   static const std::vector<ParameterSpec> table = hybrid_table();
   return table;
 }

@@ -33,7 +33,7 @@ class HybridFamily final : public Family {
   double reach(const Robot& robot) const override;
   void set_effect_frame(const Robot& robot, EffectParameters<double>& e) const override;
 
-  const std::vector<ParameterSpec>& parameter_specs() const override;
+  const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) const override;
   std::string alias_of(const std::string& name) const override;
   detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
                              const std::vector<std::optional<EffectNode>>& nodes,

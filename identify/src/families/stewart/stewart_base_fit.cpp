@@ -15,8 +15,10 @@ detail::BaseModel StewartFamily::fit_base(const Robot& robot, const PoseTable& d
   const StewartCalibration cal = calibrate_stewart(robot, data);
   const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits
   BaseModel base;
-  base.description = "seed 001 42-parameter model (iterated LS, " + std::to_string(cal.history.size()) + " rounds)";
-  base.parameters = kStewartParameterCount;
+  base.parameters = stewart_parameter_count(robot);
+  base.description = "seed 001 " + std::to_string(base.parameters) + "-parameter model" +
+                     (robot.models_leg_offsets ? " with leg offsets" : "") + " (iterated LS, " +
+                     std::to_string(cal.history.size()) + " rounds)";
   Vec6<double> w;
   w << 1, 1, 1, kOrientationWeightMm, kOrientationWeightMm, kOrientationWeightMm;
   for (std::size_t k = 0; k < data.rows.size(); ++k) {
@@ -31,7 +33,7 @@ detail::BaseModel StewartFamily::fit_base(const Robot& robot, const PoseTable& d
     n.pose_rows = true;
     n.r = w.asDiagonal() * pose_error(measured, predicted);
     n.M = w.asDiagonal();
-    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted);
+    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted, robot.models_leg_offsets);
     n.effect = *en[k];
     base.nodes.push_back(std::move(n));
   }

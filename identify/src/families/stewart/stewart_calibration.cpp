@@ -14,14 +14,18 @@
 
 namespace kincal::identify {
 
-StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose) {
+int stewart_parameter_count(const Robot& robot) {
+  return robot.models_leg_offsets ? kStewartLegOffsetParameterCount : kStewartParameterCount;
+}
+
+StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose, bool leg_offsets) {
   const Eigen::Matrix<double, 3, 6> arms = pose.R * g.platform;
   const Eigen::Matrix<double, 3, 6> legs = stewart_leg_vectors(g, pose);
   const Vec6<double> lengths = legs.colwise().norm().transpose();
   // J·twist = δ(leg length); the actual machine keeps |L_i'| = q_i + l_i', so a
   // parameter error c_i = dl_i + u_i·dB_i − u_i·(R·dP_i) needs J·twist = c.
   const Eigen::PartialPivLU<Mat6<double>> lu(stewart_jacobian(arms, legs, lengths));
-  StewartErrorJacobian E;
+  StewartErrorJacobian E(6, leg_offsets ? kStewartLegOffsetParameterCount : kStewartParameterCount);
   for (int i = 0; i < 6; ++i) {
     const Vec6<double> column = lu.solve(Vec6<double>::Unit(i));  // J⁻¹·e_i
     const Vec3<double> u = legs.col(i) / lengths(i);
@@ -30,7 +34,10 @@ StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, co
       E.col(7 * i + a) = column * u(a);        // dB_i
       E.col(7 * i + 4 + a) = -column * Rtu(a);  // dP_i (platform frame)
     }
-    E.col(7 * i + 3) = column;  // dl_i
+    // dl_i; the leg's own length l_i = √(|L_i|² − s_i) (stewart.hpp) over |L_i|
+    const double leg = g.leg_offset_sq(i) == 0 ? lengths(i) : std::sqrt(lengths(i) * lengths(i) - g.leg_offset_sq(i));
+    E.col(7 * i + 3) = column * (leg / lengths(i));
+    if (leg_offsets) E.col(kStewartParameterCount + i) = column / (2 * lengths(i));  // dsq_i
   }
   return E;
 }
@@ -41,6 +48,7 @@ StewartGeometry<double> stewart_with_errors(const StewartGeometry<double>& nomin
     g.base.col(i) += theta.segment<3>(7 * i);
     g.length_offset(i) += theta(7 * i + 3);
     g.platform.col(i) += theta.segment<3>(7 * i + 4);
+    if (theta.size() > kStewartParameterCount) g.leg_offset_sq(i) += theta(kStewartParameterCount + i);
   }
   return g;
 }
@@ -106,15 +114,16 @@ namespace {
                                        const std::vector<std::string>& names, Eigen::Index rank) {
   std::string which;
   for (const Eigen::Index j : unidentifiable_columns(H)) which += (which.empty() ? "" : ", ") + names[std::size_t(j)];
-  const PoseDesignRows rows = [&g](const Eigen::Matrix<double, 6, 1>& pose) -> Eigen::MatrixXd {
-    Eigen::MatrixXd E = stewart_error_jacobian(g, Pose<double>::from_xyz_rpy(pose));
+  const bool leg_offsets = names.size() > std::size_t(kStewartParameterCount);
+  const PoseDesignRows rows = [&g, leg_offsets](const Eigen::Matrix<double, 6, 1>& pose) -> Eigen::MatrixXd {
+    Eigen::MatrixXd E = stewart_error_jacobian(g, Pose<double>::from_xyz_rpy(pose), leg_offsets);
     E.bottomRows<3>() *= kOrientationWeightMm;
     if (!E.allFinite()) return {};
     return E;
   };
   const IdentifiabilityHint hint = identifiability_hint(null_space_combinations(H, names), names, poses, rows);
   throw InputError(data.file, 0, 0,
-                   "the calibration poses do not determine all 42 parameters (rank " + std::to_string(rank) +
+                   "the calibration poses do not determine all " + std::to_string(names.size()) + " parameters (rank " + std::to_string(rank) +
                        "); not identifiable: " + which + ". To separate them: " + hint.text);
 }
 
@@ -129,7 +138,8 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   // the machine was there. MODEL.json keeps the robot as given (stewart_model).
   const Robot open = without_limits(nominal);
   const std::vector<Node> nodes = calibration_nodes(open, data);
-  const int m = kStewartParameterCount;
+  const int m = stewart_parameter_count(nominal);
+  const bool leg_offsets = nominal.models_leg_offsets;
   const Eigen::Index n = Eigen::Index(6 * nodes.size());
   const std::vector<std::string> names = parameter_names(nominal);
 
@@ -157,7 +167,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
       }
       const Twist<double> dq = pose_error(nodes[k].measured, predicted);
       const Eigen::Index row = Eigen::Index(6 * k);
-      H.middleRows<6>(row) = stewart_error_jacobian(g, predicted);
+      H.middleRows<6>(row) = stewart_error_jacobian(g, predicted, leg_offsets);
       at[k] = predicted.to_xyz_rpy();
       y.segment<6>(row) = dq;
       H.middleRows<3>(row + 3) *= kOrientationWeightMm;
@@ -325,7 +335,7 @@ CalibrationModel stewart_model(const Robot& nominal, const StewartCalibration& c
   model.settings["orientation_weight_mm"] = kOrientationWeightMm;
   model.data_file = data_file;
   const std::vector<std::string> names = parameter_names(nominal);
-  for (int j = 0; j < kStewartParameterCount; ++j)
+  for (int j = 0; j < stewart_parameter_count(nominal); ++j)
     model.parameters.push_back({names[std::size_t(j)], c.theta(j), c.standard_error(j), true});
   return model;
 }

@@ -12,18 +12,24 @@ namespace kincal::identify {
 namespace detail {
 namespace {
 
-// seed 001's 42 errors (per leg dXB dYB dZB dl dXP dYP dZP), the corrected
-// machine's exact FK, and the rigid-motion convention on its joints.
+// seed 001's 42 errors (per leg dXB dYB dZB dl dXP dYP dZP; then dsq1..dsq6
+// for a robot with leg_offset_sq), the corrected machine's exact FK, and the
+// rigid-motion convention on its joints.
 class StewartErrors final : public FamilyErrors {
  public:
-  explicit StewartErrors(const Robot& robot) : robot_(robot), g_(robot.stewart()) {}
-  int size() const override { return kStewartParameterCount; }
+  explicit StewartErrors(const Robot& robot)
+      : robot_(robot), g_(robot.stewart()), size_(stewart_parameter_count(robot)), leg_offsets_(robot.models_leg_offsets) {}
+  int size() const override { return size_; }
   std::vector<std::string> names() const override {
     std::vector<std::string> n = parameter_names(robot_);
-    n.resize(kStewartParameterCount);
+    n.resize(std::size_t(size_));
     return n;
   }
-  std::vector<std::string> units() const override { return std::vector<std::string>(kStewartParameterCount, "mm"); }
+  std::vector<std::string> units() const override {
+    std::vector<std::string> u(std::size_t(size_), "mm");
+    for (int j = kStewartParameterCount; j < size_; ++j) u[std::size_t(j)] = "mm2";
+    return u;
+  }
   NodeGuess start(const Pose<double>& commanded) const override { return {commanded, {}}; }
   bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const override {
     if (stewart_fk(stewart_with_errors(g_, errors), q, guess.pose, pose).status != Status::Ok) return false;
@@ -31,10 +37,10 @@ class StewartErrors final : public FamilyErrors {
     return true;
   }
   Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const override {
-    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose);
+    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose, leg_offsets_);
   }
   bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const override {
-    T = stewart_error_jacobian(g_, pose);
+    T = stewart_error_jacobian(g_, pose, leg_offsets_);
     return true;
   }
   // A rigid motion of all platform joints (with the targets) changes no
@@ -57,6 +63,8 @@ class StewartErrors final : public FamilyErrors {
  private:
   Robot robot_;
   StewartGeometry<double> g_;
+  int size_;
+  bool leg_offsets_;
 };
 
 }  // namespace

@@ -12,7 +12,7 @@ namespace kincal::identify {
 Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
-           r.with_common_optional({"length_offset"}));
+           r.with_common_optional({"length_offset", "leg_offset_sq"}));
   Robot robot;
   StewartGeometry<double> g;
   g.base = r.points<6>(doc["base_joints"], "/base_joints");
@@ -21,6 +21,10 @@ Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionR
   for (int i = 0; i < 6; ++i)
     if (g.min_length(i) < 0) r.fail("/stroke/min/" + std::to_string(i), "'stroke/min' is a leg length and must not be negative");
   g.length_offset = doc.contains("length_offset") ? r.vector<6>(doc["length_offset"], "/length_offset") : Vec6<double>::Zero();
+  // Leg lines beside their U centres (core/stewart.hpp): the key's presence
+  // is the choice to model them.
+  robot.models_leg_offsets = doc.contains("leg_offset_sq");
+  if (robot.models_leg_offsets) g.leg_offset_sq = r.vector<6>(doc["leg_offset_sq"], "/leg_offset_sq");
   const nlohmann::json& home = r.object(doc["home"], "/home", {"x", "y", "z", "rx", "ry", "rz"}, {});
   g.home = Pose<double>::from_xyz_rpy(r.number(home["x"], "/home/x"), r.number(home["y"], "/home/y"),
                                       r.number(home["z"], "/home/z"), r.angle(home["rx"], "/home/rx"),
@@ -46,6 +50,7 @@ void StewartFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
   j["platform_joints"] = detail::points_json<6>(g.platform);
   j["stroke"] = {{"min", detail::vector_json<6>(g.min_length)}, {"max", detail::vector_json<6>(g.max_length)}};
   j["length_offset"] = detail::vector_json<6>(g.length_offset);
+  if (robot.models_leg_offsets) j["leg_offset_sq"] = detail::vector_json<6>(g.leg_offset_sq);
   const Vec6<double> h = g.home.to_xyz_rpy() + Vec6<double>::Zero();
   j["home"] = {{"x", h(0)}, {"y", h(1)}, {"z", h(2)}, {"rx", h(3)}, {"ry", h(4)}, {"rz", h(5)}};
 }
@@ -112,6 +117,19 @@ std::vector<ParameterSpec> stewart_table() {
   return t;
 }
 
+// seed 001's 42, then the six squared leg-line offsets (robots with the key
+// leg_offset_sq; core/stewart.hpp).
+std::vector<ParameterSpec> stewart_table_with_leg_offsets() {
+  std::vector<ParameterSpec> t = stewart_table();
+  for (int i = 0; i < 6; ++i) {
+    const std::string leg = std::to_string(i + 1);
+    t.push_back({"dsq" + leg, "mm2",
+                 "leg " + leg + " prismatic line's squared distance from its U centre (U-S distance = sqrt(l^2 + this))",
+                 [i](Robot& r, double v) { r.stewart().leg_offset_sq(i) += v; }});
+  }
+  return t;
+}
+
 // seed 001 §5.2: the error-free commands drive the error-containing FK.
 class StewartActual final : public ActualMachine {
  public:
@@ -140,9 +158,10 @@ class StewartActual final : public ActualMachine {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& StewartFamily::parameter_specs() const {
+const std::vector<ParameterSpec>& StewartFamily::parameter_specs(const Robot& robot) const {
   static const std::vector<ParameterSpec> table = stewart_table();
-  return table;
+  static const std::vector<ParameterSpec> with_leg_offsets = stewart_table_with_leg_offsets();
+  return robot.models_leg_offsets ? with_leg_offsets : table;
 }
 
 AnyCalibrationTable StewartFamily::machine_table(const CalibrationModel& model) const {

@@ -28,7 +28,7 @@ class StewartFamily final : public Family {
   double characteristic_length(const Robot& robot) const override { return robot.stewart().characteristic_length; }
   double reach(const Robot& robot) const override;
 
-  const std::vector<ParameterSpec>& parameter_specs() const override;
+  const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) const override;
   detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
                              const std::vector<std::optional<EffectNode>>& nodes,
                              std::optional<EstimatorKind> estimator, bool finish_least_squares,
