@@ -17,7 +17,7 @@ namespace kincal::identify {
 
 struct ParameterSpec {
   std::string name;         // e.g. "dXB1" (case-sensitive: dXA1 ≠ dXa1)
-  const char* unit;         // "mm" or "rad"
+  const char* unit;         // "mm", "rad" or "mm2" (the 6-UPS leg_offset_sq)
   std::string description;  // what the value is added to
   std::function<void(Robot&, double)> add;  // adds the value to the robot's geometry
 };

@@ -114,7 +114,7 @@ namespace {
                                        const std::vector<std::string>& names, Eigen::Index rank) {
   std::string which;
   for (const Eigen::Index j : unidentifiable_columns(H)) which += (which.empty() ? "" : ", ") + names[std::size_t(j)];
-  const bool leg_offsets = names.size() > std::size_t(kStewartParameterCount);
+  const bool leg_offsets = H.cols() > kStewartParameterCount;
   const PoseDesignRows rows = [&g, leg_offsets](const Eigen::Matrix<double, 6, 1>& pose) -> Eigen::MatrixXd {
     Eigen::MatrixXd E = stewart_error_jacobian(g, Pose<double>::from_xyz_rpy(pose), leg_offsets);
     E.bottomRows<3>() *= kOrientationWeightMm;

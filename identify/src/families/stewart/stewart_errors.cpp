@@ -17,17 +17,12 @@ namespace {
 // rigid-motion convention on its joints.
 class StewartErrors final : public FamilyErrors {
  public:
-  explicit StewartErrors(const Robot& robot)
-      : robot_(robot), g_(robot.stewart()), size_(stewart_parameter_count(robot)), leg_offsets_(robot.models_leg_offsets) {}
-  int size() const override { return size_; }
-  std::vector<std::string> names() const override {
-    std::vector<std::string> n = parameter_names(robot_);
-    n.resize(std::size_t(size_));
-    return n;
-  }
+  explicit StewartErrors(const Robot& robot) : robot_(robot), g_(robot.stewart()) {}
+  int size() const override { return stewart_parameter_count(robot_); }
+  std::vector<std::string> names() const override { return parameter_names(robot_); }
   std::vector<std::string> units() const override {
-    std::vector<std::string> u(std::size_t(size_), "mm");
-    for (int j = kStewartParameterCount; j < size_; ++j) u[std::size_t(j)] = "mm2";
+    std::vector<std::string> u;
+    for (const ParameterSpec& s : parameter_specs(robot_)) u.push_back(s.unit);
     return u;
   }
   NodeGuess start(const Pose<double>& commanded) const override { return {commanded, {}}; }
@@ -37,10 +32,10 @@ class StewartErrors final : public FamilyErrors {
     return true;
   }
   Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const override {
-    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose, leg_offsets_);
+    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose, robot_.models_leg_offsets);
   }
   bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const override {
-    T = stewart_error_jacobian(g_, pose, leg_offsets_);
+    T = stewart_error_jacobian(g_, pose, robot_.models_leg_offsets);
     return true;
   }
   // A rigid motion of all platform joints (with the targets) changes no
@@ -63,8 +58,6 @@ class StewartErrors final : public FamilyErrors {
  private:
   Robot robot_;
   StewartGeometry<double> g_;
-  int size_;
-  bool leg_offsets_;
 };
 
 }  // namespace
