@@ -210,6 +210,19 @@ template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
   turn_about_z(T.R, s, c);
 }
 
+// sin and cos of atan2(y, x), without libm: (y, x) over its norm, which it
+// returns; (0, 1) where both vanish, as atan2(0, 0) = 0.
+template <class S> S direction(S y, S x, S& sine, S& cosine) {
+  const S h = std::sqrt(x * x + y * y);
+  if (!(h > S(0))) {
+    sine = S(0), cosine = S(1);
+    return h;
+  }
+  const S inv = S(1) / h;
+  sine = y * inv, cosine = x * inv;
+  return h;
+}
+
 // A chain's end pose at joint values x; `visit(j, direction, point)` is told
 // each joint's axis in the world on the way (the Newton writes its Jacobian
 // from them, straight into the LU's storage).
@@ -267,8 +280,11 @@ Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const 
 // The residual that moves a chain's end onto `target`: (Δp, ω) in world axes,
 // ω = vee(skew part of R_target·R_endᵀ) — sin θ·axis, which vanishes exactly
 // where the rotations agree (|θ| < π/2) and is what Newton needs; no libm.
+// Only D's six off-diagonal entries, D_ij = row i of R_target · row j of
+// R_end: no 3×3 product (a third of its multiplications, and no D on the
+// stack of the controller's deepest path, close_serial's).
 template <class S> Vec6<S> closure_residual(const Pose<S>& target, const Pose<S>& end) {
-  const Mat3<S> D = target.R * end.R.transpose();
+  const auto D = [&](int i, int j) { return target.R.row(i).dot(end.R.row(j)); };
   Vec6<S> e;
   e.template head<3>() = target.p - end.p;
   e(3) = S(0.5) * (D(2, 1) - D(1, 2));
@@ -340,18 +356,8 @@ bool nominal_ups_start(const Vec3<S>& A1, const Mat3<S>& E, const Pose<S>& targe
   length = v.norm();
   if (!(length > S(0))) return false;
   v /= length;
+  using hybrid_exact_detail::direction;
   const S one(1), zero(0);
-  // (sin, cos) of atan2(y, x); (0, 1) where both vanish, as atan2(0, 0) = 0.
-  const auto direction = [&](S y, S x, S& s, S& c) {
-    const S h = std::sqrt(x * x + y * y);
-    if (!(h > zero)) {
-      s = zero, c = one;
-      return h;
-    }
-    const S inv = one / h;
-    s = y * inv, c = x * inv;
-    return h;
-  };
   const S h0 = direction(-v(1), v(2), sine[0], cosine[0]);
   sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);  // x1 = asin v0: cos x1 = √(v1² + v2²)
   cosine[1] = h0;
@@ -491,6 +497,21 @@ template <> struct HybridExactTolerance<float> {
 
 namespace hybrid_exact_detail {
 
+// sin δ and cos δ of a Newton step's angle. A step is mostly below 2⁻¹⁰
+// rad (the start is the nominal closed form, the errors small), where the
+// series to δ⁵ and δ⁴ is exact in double (the next terms, δ⁷/5040 and
+// δ⁶/720, are below 2e-22 of sin δ and of 1): a sixth of sin_cos's ~70
+// instructions (its range tests and its series to a¹⁰), ~40 steps a point.
+template <class S> bool step_sin_cos(S d, S& sine, S& cosine) {
+  if (d <= S(0.0009765625) && d >= S(-0.0009765625)) {
+    const S t = d * d;
+    sine = d * (S(1) - t * S(1.0 / 6) * (S(1) - t * S(1.0 / 20)));
+    cosine = S(1) - t * S(0.5) * (S(1) - t * S(1.0 / 12));
+    return true;
+  }
+  return sin_cos(d, sine, cosine);
+}
+
 // Newton on the joint variables x of a 6-joint serial chain (`ends(x,
 // visit)` returns the end pose and tells `visit(j, direction, point)` each
 // joint's axis) until its end coincides with `target`. The Jacobian's
@@ -546,7 +567,7 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
       const S d = step(j) / L;
       x[j] += d;
       S sd, cd;
-      if (!sin_cos(d, sd, cd)) return Status::NotConverged;  // a diverged step
+      if (!step_sin_cos(d, sd, cd)) return Status::NotConverged;  // a diverged step
       const S s = sine[j], c = cosine[j];
       sine[j] = s * cd + c * sd;
       cosine[j] = c * cd - s * sd;
@@ -583,10 +604,13 @@ Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& 
 }
 
 // The nominal machine's configuration at a tool pose as the serial chain's
-// start (θ1, θ2, c − e, θ4, θ5, θ6); not inlined, so its frames are off the
-// stack while the Newton runs.
+// start (θ1, θ2, c − e, θ4, θ5, θ6), with its revolute joints' sines and
+// cosines for close_serial (from the atan2 arguments, not a sin_cos of each
+// angle: ~0.4k instructions of the host's point, callgrind); not inlined,
+// so its frames are off the stack while the Newton runs.
 template <class S>
-KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up_split, const Pose<S>& tool, S* x) {
+KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up_split, const Pose<S>& tool, S* x,
+                                          S* sine, S* cosine) {
   HybridFrames<S> f;
   Vec3<S> angles;
   const Status s = hybrid_frames_at_pose(nominal, tool, f, angles);
@@ -595,17 +619,28 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
   x[1] = std::atan2(f.Rp(0, 2), f.Rp(0, 0));
   x[2] = f.extension - up_split;
   for (int j = 0; j < 3; ++j) x[3 + j] = angles(j);
+  // hybrid_frames_at_pose's atan2 arguments: Rp = Rx(θ1)·Ry(θ2); F4·x = x5
+  // = Rp·Rz(θ4)·x, F5·z = u = F4·Rx(θ5)·z, F6 = F5·Ry(θ6).
+  const Vec3<S> x5 = f.F4.col(0), u = f.F5.col(2);
+  direction(f.Rp(2, 1), f.Rp(1, 1), sine[0], cosine[0]);
+  direction(f.Rp(0, 2), f.Rp(0, 0), sine[1], cosine[1]);
+  sine[2] = S(0), cosine[2] = S(1);
+  direction(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)), sine[3], cosine[3]);
+  direction(-u.dot(f.F4.col(1)), u.dot(f.w), sine[4], cosine[4]);
+  direction(x5.dot(f.F6.col(2)), x5.dot(f.F6.col(0)), sine[5], cosine[5]);
   return Status::Ok;
 }
 
 // The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
-// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from x (the
-// nominal machine's closed-form configuration there: serial_start, called
-// first by the caller so that its frames and the chains are never on the
-// stack together). Writes x and the platform pose at the solution.
+// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from x and
+// its revolute joints' sines and cosines (the nominal machine's closed-form
+// configuration there: serial_start, called first by the caller so that its
+// frames and the chains are never on the stack together). Writes x (and
+// sine, cosine) and the platform pose at the solution.
 template <class S>
 Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
-                          const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, Pose<S>& platform) {
+                          const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, S* sine, S* cosine,
+                          Pose<S>& platform) {
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
   const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
   Pose<S> target;
@@ -617,11 +652,6 @@ Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLi
                                    [&visit](int j, const auto& a, const auto& p) { visit(3 + j, a, p); });
   };
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
-  S sine[6], cosine[6];
-  for (int j = 0; j < 6; ++j) {
-    sine[j] = S(0), cosine[j] = S(1);
-    if (!kSerialPrismatic[j]) sin_cos(x[j], sine[j], cosine[j]);  // (NaN if it fails: close_serial stops)
-  }
   SmallLu<S, 6> lu;
   const Status closed =
       close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, sine, cosine, lu);
@@ -661,10 +691,11 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
-  Status s = serial_start(nominal, c.up_split, tool, x);
+  S sine[6], cosine[6];
+  Status s = serial_start(nominal, c.up_split, tool, x, sine, cosine);
   if (s != Status::Ok) return s;
   Pose<S> platform;
-  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, platform);
+  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
@@ -690,11 +721,11 @@ namespace hybrid_exact_detail {
 // so the worst-case stack is the deeper stage, not their sum).
 template <class S>
 KINCAL_EXACT_NOINLINE Status stage_up_and_wrist(const HybridGeometry<S>& nominal, S up_split, const S* chi,
-                                                const Pose<S>& tool, S* x, Pose<S>& platform) {
+                                                const Pose<S>& tool, S* x, S* sine, S* cosine, Pose<S>& platform) {
   HybridSerialLinks<S> up, wrist;
   build_serial_chains(nominal, up_split, chi + HybridErrorLayout::up(), chi + HybridErrorLayout::wrist(),
                       chi + HybridErrorLayout::tool(), up, wrist);
-  return close_up_and_wrist(nominal, up, wrist, tool, x, platform);
+  return close_up_and_wrist(nominal, up, wrist, tool, x, sine, cosine, platform);
 }
 
 // A limb's leg length at a platform pose: the closure in its own frame, so
@@ -727,10 +758,11 @@ KINCAL_EXACT_NOINLINE Status hybrid_exact_ik(const HybridGeometry<S>& nominal, S
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
-  Status s = serial_start(nominal, up_split, tool, x);
+  S sine[6], cosine[6];
+  Status s = serial_start(nominal, up_split, tool, x, sine, cosine);
   if (s != Status::Ok) return s;
   Pose<S> platform;
-  s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, platform);
+  s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, sine, cosine, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
