@@ -636,9 +636,12 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
 // its revolute joints' sines and cosines (the nominal machine's closed-form
 // configuration there: serial_start, called first by the caller so that its
 // frames and the chains are never on the stack together). Writes x (and
-// sine, cosine) and the platform pose at the solution.
+// sine, cosine) and the platform pose at the solution. Not inlined: in the
+// controller's stage_up_and_wrist its frame and build_serial_chains's are
+// then apart (inlined at -Os, the stage's stack was 4 540 B, over the bar;
+// examples/firmware/footprint.sh, 2026-11-28).
 template <class S>
-Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
+KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
                           const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, S* sine, S* cosine,
                           Pose<S>& platform) {
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
