@@ -188,6 +188,15 @@ inline constexpr bool kWristPrismatic[3] = {false, false, false};
 // T ← T·M(x) in place: a revolute joint turns two columns of R (T·Rz(x)), a
 // prismatic one moves the origin along the third (T·Tz(x)) — a quarter of a
 // full pose product, and the chains are mostly these.
+// R ← R·Rz(x) from sin x and cos x.
+template <class S> void turn_about_z(Mat3<S>& R, S s, S c) {
+  for (int k = 0; k < 3; ++k) {  // row by row: no column temporary on the controller's deepest path
+    const S rx = R(k, 0), ry = R(k, 1);
+    R(k, 0) = c * rx + s * ry;
+    R(k, 1) = c * ry - s * rx;
+  }
+}
+
 template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
   if (prismatic) {
     T.p += x * T.R.col(2);
@@ -198,11 +207,20 @@ template <class S> void move_along_joint(Pose<S>& T, bool prismatic, S x) {
     T.p.setConstant(x - x + S(NAN));
     return;
   }
-  for (int k = 0; k < 3; ++k) {  // R·Rz(x), row by row: no column temporary on the controller's deepest path
-    const S rx = T.R(k, 0), ry = T.R(k, 1);
-    T.R(k, 0) = c * rx + s * ry;
-    T.R(k, 1) = c * ry - s * rx;
+  turn_about_z(T.R, s, c);
+}
+
+// sin and cos of atan2(y, x), without libm: (y, x) over its norm, which it
+// returns; (0, 1) where both vanish, as atan2(0, 0) = 0.
+template <class S> S direction(S y, S x, S& sine, S& cosine) {
+  const S h = std::sqrt(x * x + y * y);
+  if (!(h > S(0))) {
+    sine = S(0), cosine = S(1);
+    return h;
   }
+  const S inv = S(1) / h;
+  sine = y * inv, cosine = x * inv;
+  return h;
 }
 
 // A chain's end pose at joint values x; `visit(j, direction, point)` is told
@@ -220,6 +238,34 @@ Pose<S> chain_end_visiting(const HybridChainLinks<S, N>& c, const bool* prismati
   return T * c.end;
 }
 
+// The same for the Newton of close_serial, which carries each revolute
+// joint's sine and cosine (`sine[j]`, `cosine[j]`; x[j] only for a prismatic
+// joint) instead of the angle: no sin / cos per evaluation (five of them were
+// ~0.5k of the ~1.7k instructions of a UPS limb's evaluation, callgrind).
+// `parent` null: the chain starts at the world frame ({R0}), whose product
+// would multiply by the identity (the UPS limbs and the UP limb);
+// `kEndTranslation`: the end link has no rotation (a UPS limb's, from
+// build_ups_limb: its S centre's Δx, Δy), so T·end is p += R·t.
+template <bool kEndTranslation, class S, int N, class Visit>
+Pose<S> chain_end_turned(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>* parent, const S* x,
+                         const S* sine, const S* cosine, Visit&& visit) {
+  Pose<S> T = parent != nullptr ? *parent * c.base : c.base;
+  for (int j = 0; j < N; ++j) {
+    T = T * c.link[j];
+    visit(j, T.R.col(2), T.p);
+    if (prismatic[j])
+      T.p += x[j] * T.R.col(2);
+    else
+      turn_about_z(T.R, sine[j], cosine[j]);
+  }
+  if constexpr (kEndTranslation) {
+    T.p.noalias() += T.R * c.end.p;
+    return T;
+  } else {
+    return T * c.end;
+  }
+}
+
 // The same, with the axes in `axes` if given.
 template <class S, int N>
 Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const Pose<S>& parent, const S* x,
@@ -234,8 +280,11 @@ Pose<S> chain_end(const HybridChainLinks<S, N>& c, const bool* prismatic, const 
 // The residual that moves a chain's end onto `target`: (Δp, ω) in world axes,
 // ω = vee(skew part of R_target·R_endᵀ) — sin θ·axis, which vanishes exactly
 // where the rotations agree (|θ| < π/2) and is what Newton needs; no libm.
+// Only D's six off-diagonal entries, D_ij = row i of R_target · row j of
+// R_end: no 3×3 product (a third of its multiplications, and no D on the
+// stack of the controller's deepest path, close_serial's).
 template <class S> Vec6<S> closure_residual(const Pose<S>& target, const Pose<S>& end) {
-  const Mat3<S> D = target.R * end.R.transpose();
+  const auto D = [&](int i, int j) { return target.R.row(i).dot(end.R.row(j)); };
   Vec6<S> e;
   e.template head<3>() = target.p - end.p;
   e(3) = S(0.5) * (D(2, 1) - D(1, 2));
@@ -291,6 +340,37 @@ template <class S> bool nominal_ups_joints(const Vec3<S>& A1, const Mat3<S>& E, 
   x[3] = std::atan2(-R(1, 2), R(2, 2));
   x[4] = std::asin(R(0, 2) < -one ? -one : R(0, 2) > one ? one : R(0, 2));
   x[5] = std::atan2(-R(0, 1), R(0, 0));
+  return true;
+}
+
+// The same start for close_ups, which needs only the leg's length: the
+// joints' sines and cosines straight from the leg's direction and the
+// rotation's entries (the atan2 / asin arguments over their norms), not the
+// angles — the three atan2, two asin and then five sin / cos of an angle
+// were ~1.4k of a limb's ~5k instructions (callgrind). The same branch as
+// nominal_ups_joints (cos x1, cos x4 ≥ 0); `sine[2]`, `cosine[2]` (the P
+// joint) are set to 0, 1.
+template <class S>
+bool nominal_ups_start(const Vec3<S>& A1, const Mat3<S>& E, const Pose<S>& target, S& length, S* sine, S* cosine) {
+  Vec3<S> v = E.transpose() * (target.p - A1);
+  length = v.norm();
+  if (!(length > S(0))) return false;
+  v /= length;
+  using hybrid_exact_detail::direction;
+  const S one(1), zero(0);
+  const S h0 = direction(-v(1), v(2), sine[0], cosine[0]);
+  sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);  // x1 = asin v0: cos x1 = √(v1² + v2²)
+  cosine[1] = h0;
+  sine[2] = zero, cosine[2] = one;
+  // R = Ry(−x1)·Rx(−x0)·Eᵀ·R_target = Rx(x3)·Ry(x4)·Rz(x5).
+  Mat3<S> Rx, Ry;
+  Rx << one, zero, zero, zero, cosine[0], sine[0], zero, -sine[0], cosine[0];
+  Ry << cosine[1], zero, -sine[1], zero, one, zero, sine[1], zero, cosine[1];
+  const Mat3<S> R = Ry * Rx * (E.transpose() * target.R);
+  const S h3 = direction(-R(1, 2), R(2, 2), sine[3], cosine[3]);
+  sine[4] = R(0, 2) < -one ? -one : R(0, 2) > one ? one : R(0, 2);  // cos x4 = √(R12² + R22²)
+  cosine[4] = h3;
+  direction(-R(0, 1), R(0, 0), sine[5], cosine[5]);
   return true;
 }
 
@@ -417,6 +497,22 @@ template <> struct HybridExactTolerance<float> {
 
 namespace hybrid_exact_detail {
 
+// sin δ and cos δ of a Newton step's angle. A step is mostly below 2⁻¹⁰
+// rad (the start is the nominal closed form, the errors small), where the
+// series to δ⁵ and δ⁴ is exact in double (the next terms, δ⁷/5040 and
+// δ⁶/720, are below 2e-22 of sin δ and of 1): ~28 instructions instead of
+// sin_cos's ~70 (its range tests and its series to a¹⁰), ~40 steps a point
+// (callgrind: 28.9k -> 26.7k instructions per compensated point).
+template <class S> bool step_sin_cos(S d, S& sine, S& cosine) {
+  if (d <= S(0.0009765625) && d >= S(-0.0009765625)) {
+    const S t = d * d;
+    sine = d * (S(1) - t * S(1.0 / 6) * (S(1) - t * S(1.0 / 20)));
+    cosine = S(1) - t * S(0.5) * (S(1) - t * S(1.0 / 12));
+    return true;
+  }
+  return sin_cos(d, sine, cosine);
+}
+
 // Newton on the joint variables x of a 6-joint serial chain (`ends(x,
 // visit)` returns the end pose and tells `visit(j, direction, point)` each
 // joint's axis) until its end coincides with `target`. The Jacobian's
@@ -429,13 +525,18 @@ namespace hybrid_exact_detail {
 // On Ok `lu` holds a factorisation at the last iterate or the one before
 // (δy = J⁻¹·δ(end), revolute y = L·θ) if `keep_factorisation`, for the FK's
 // outer Newton; otherwise the IK's last evaluation is not factorised.
+// A revolute joint j is carried as its sine and cosine too (`sine[j]`,
+// `cosine[j]`, at x[j] on entry), which `ends(x, sine, cosine, visit)`
+// evaluates by (chain_end_turned): each step turns them by the step's
+// angle (angle addition), whose sin_cos is cheap near a solution (|δθ| ≤
+// 1/8: no halvings), instead of a sin_cos of every angle at every evaluation.
 template <class S, class Ends>
-Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, SmallLu<S, 6>& lu,
-                    bool keep_factorisation = false) {
+Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, S* sine, S* cosine,
+                    SmallLu<S, 6>& lu, bool keep_factorisation = false) {
   S previous = S(0);
   for (int it = 0;; ++it) {
     auto J = lu.storage();
-    const Pose<S> end = ends(x, [&J](int j, const auto& a, const auto& p) {
+    const Pose<S> end = ends(x, sine, cosine, [&J](int j, const auto& a, const auto& p) {
       J.template block<3, 1>(0, j) = p.cross(a);
       J.template block<3, 1>(3, j) = a;
     });
@@ -459,7 +560,19 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
     if (closed || (it == 0 && err <= HybridExactTolerance<S>::closure)) return Status::Ok;  // (or the start was the solution)
     if (it == HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
     const Vec6<S> step = lu.solve(e);
-    for (int j = 0; j < 6; ++j) x[j] += prismatic[j] ? step(j) : step(j) / L;
+    for (int j = 0; j < 6; ++j) {
+      if (prismatic[j]) {
+        x[j] += step(j);
+        continue;
+      }
+      const S d = step(j) / L;
+      x[j] += d;
+      S sd, cd;
+      if (!step_sin_cos(d, sd, cd)) return Status::NotConverged;  // a diverged step
+      const S s = sine[j], c = cosine[j];
+      sine[j] = s * cd + c * sd;
+      cosine[j] = c * cd - s * sd;
+    }
     // Newton converges quadratically here, r_{k+1} ≈ K·r_k² with K ≈
     // r_k / r_{k−1}² seen on the last step: when the residual this step
     // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
@@ -473,23 +586,32 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
   }
 }
 
-// UPS limb `limb` closed on the platform pose `platform` (in {R0}): its six
-// joint variables x, Newton from the nominal closed form.
+// UPS limb `limb` closed on the platform pose `platform` (in {R0}): its
+// prismatic variable, the leg's length (written on Ok), Newton from the
+// nominal closed form (its angles are never needed: only their sines and
+// cosines, nominal_ups_start).
 template <class S>
-Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S* x, SmallLu<S, 6>& lu,
+Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& length, SmallLu<S, 6>& lu,
                  bool keep_factorisation = false) {
   const Pose<S> target = platform * limb.attach;
-  if (!nominal_ups_joints(limb.origin, limb.axes, target, x)) return Status::Unreachable;
-  const Pose<S> world;
-  auto ends = [&](const S* xs, auto&& visit) { return chain_end_visiting(limb.links, kUpsPrismatic, world, xs, visit); };
-  return close_serial(ends, kUpsPrismatic, target, L, x, lu, keep_factorisation);
+  S x[6] = {}, sine[6], cosine[6];
+  if (!nominal_ups_start(limb.origin, limb.axes, target, x[2], sine, cosine)) return Status::Unreachable;
+  auto ends = [&](const S* xs, const S* sn, const S* cs, auto&& visit) {
+    return chain_end_turned<true>(limb.links, kUpsPrismatic, static_cast<const Pose<S>*>(nullptr), xs, sn, cs, visit);
+  };
+  const Status s = close_serial(ends, kUpsPrismatic, target, L, x, sine, cosine, lu, keep_factorisation);
+  if (s == Status::Ok) length = x[2];
+  return s;
 }
 
 // The nominal machine's configuration at a tool pose as the serial chain's
-// start (θ1, θ2, c − e, θ4, θ5, θ6); not inlined, so its frames are off the
-// stack while the Newton runs.
+// start (θ1, θ2, c − e, θ4, θ5, θ6), with its revolute joints' sines and
+// cosines for close_serial (from the atan2 arguments, not a sin_cos of each
+// angle: ~0.3k instructions of the host's point, callgrind); not inlined,
+// so its frames are off the stack while the Newton runs.
 template <class S>
-KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up_split, const Pose<S>& tool, S* x) {
+KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up_split, const Pose<S>& tool, S* x,
+                                          S* sine, S* cosine) {
   HybridFrames<S> f;
   Vec3<S> angles;
   const Status s = hybrid_frames_at_pose(nominal, tool, f, angles);
@@ -498,32 +620,48 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
   x[1] = std::atan2(f.Rp(0, 2), f.Rp(0, 0));
   x[2] = f.extension - up_split;
   for (int j = 0; j < 3; ++j) x[3 + j] = angles(j);
+  // hybrid_frames_at_pose's atan2 arguments: Rp = Rx(θ1)·Ry(θ2); F4·x = x5
+  // = Rp·Rz(θ4)·x, F5·z = u = F4·Rx(θ5)·z, F6 = F5·Ry(θ6).
+  const Vec3<S> x5 = f.F4.col(0), u = f.F5.col(2);
+  direction(f.Rp(2, 1), f.Rp(1, 1), sine[0], cosine[0]);
+  direction(f.Rp(0, 2), f.Rp(0, 0), sine[1], cosine[1]);
+  sine[2] = S(0), cosine[2] = S(1);
+  direction(x5.dot(f.Rp.col(1)), x5.dot(f.Rp.col(0)), sine[3], cosine[3]);
+  direction(-u.dot(f.F4.col(1)), u.dot(f.w), sine[4], cosine[4]);
+  direction(x5.dot(f.F6.col(2)), x5.dot(f.F6.col(0)), sine[5], cosine[5]);
   return Status::Ok;
 }
 
 // The UP limb and the wrist as one serial chain of six joints (θ1, θ2,
-// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from x (the
-// nominal machine's closed-form configuration there: serial_start, called
-// first by the caller so that its frames and the chains are never on the
-// stack together). Writes x and the platform pose at the solution.
+// c − e, θ4, θ5, θ6) closed on the tool pose (in {R}), Newton from x and
+// its revolute joints' sines and cosines (the nominal machine's closed-form
+// configuration there: serial_start, called first by the caller so that its
+// frames and the chains are never on the stack together). Writes x (and
+// sine, cosine) and the platform pose at the solution. Not inlined: in the
+// controller's stage_up_and_wrist its frame and build_serial_chains's are
+// then apart (inlined at -Os, the stage's stack was 4 540 B, over the bar;
+// examples/firmware/footprint.sh, 2026-11-28).
 template <class S>
-Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
-                          const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, Pose<S>& platform) {
+KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
+                          const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, S* sine, S* cosine,
+                          Pose<S>& platform) {
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
   const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
   Pose<S> target;
   target.R = Rt * tool.R;
   target.p = nominal.workpiece_origin + Rt * tool.p;
-  const Pose<S> world;
-  auto serial = [&](const S* xs, auto&& visit) {
-    platform = chain_end_visiting(up, kUpPrismatic, world, xs, visit);
-    return chain_end_visiting(wrist, kWristPrismatic, platform, xs + 3,
-                              [&visit](int j, const auto& a, const auto& p) { visit(3 + j, a, p); });
+  auto serial = [&](const S* xs, const S* sn, const S* cs, auto&& visit) {
+    platform = chain_end_turned<false>(up, kUpPrismatic, static_cast<const Pose<S>*>(nullptr), xs, sn, cs, visit);
+    return chain_end_turned<false>(wrist, kWristPrismatic, &platform, xs + 3, sn + 3, cs + 3,
+                                   [&visit](int j, const auto& a, const auto& p) { visit(3 + j, a, p); });
   };
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
   SmallLu<S, 6> lu;
-  const Status closed = close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, lu);
-  if (closed == Status::Ok) serial(x, [](int, const auto&, const auto&) {});  // the platform at the solution
+  const Status closed =
+      close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, sine, cosine, lu);
+  if (closed == Status::Ok)  // the platform at the solution: the UP limb only (the wrist does not move it)
+    platform = chain_end_turned<false>(up, kUpPrismatic, static_cast<const Pose<S>*>(nullptr), x, sine, cosine,
+                                       [](int, const auto&, const auto&) {});
   return closed;
 }
 
@@ -557,18 +695,17 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
-  Status s = serial_start(nominal, c.up_split, tool, x);
+  S sine[6], cosine[6];
+  Status s = serial_start(nominal, c.up_split, tool, x, sine, cosine);
   if (s != Status::Ok) return s;
   Pose<S> platform;
-  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, platform);
+  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
-    S xu[6];
     SmallLu<S, 6> lu;
-    s = close_ups(c.ups[i], platform, nominal.characteristic_length, xu, lu);
+    s = close_ups(c.ups[i], platform, nominal.characteristic_length, physical(i), lu);
     if (s != Status::Ok) return s;
-    physical(i) = xu[2];
   }
   for (int j = 0; j < 3; ++j) physical(3 + j) = x[3 + j];
   s = exact_commands(nominal, physical, c.joint_offset, x[2] + c.up_split, q);
@@ -588,22 +725,19 @@ namespace hybrid_exact_detail {
 // so the worst-case stack is the deeper stage, not their sum).
 template <class S>
 KINCAL_EXACT_NOINLINE Status stage_up_and_wrist(const HybridGeometry<S>& nominal, S up_split, const S* chi,
-                                                const Pose<S>& tool, S* x, Pose<S>& platform) {
+                                                const Pose<S>& tool, S* x, S* sine, S* cosine, Pose<S>& platform) {
   HybridSerialLinks<S> up, wrist;
   build_serial_chains(nominal, up_split, chi + HybridErrorLayout::up(), chi + HybridErrorLayout::wrist(),
                       chi + HybridErrorLayout::tool(), up, wrist);
-  return close_up_and_wrist(nominal, up, wrist, tool, x, platform);
+  return close_up_and_wrist(nominal, up, wrist, tool, x, sine, cosine, platform);
 }
 
 // A limb's leg length at a platform pose: the closure in its own frame, so
 // the limb's construction and its Newton are not on the stack together.
 template <class S>
 KINCAL_EXACT_NOINLINE Status ups_leg_length(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& length) {
-  S xu[6];
   SmallLu<S, 6> lu;
-  const Status s = close_ups(limb, platform, L, xu, lu);
-  if (s == Status::Ok) length = xu[2];
-  return s;
+  return close_ups(limb, platform, L, length, lu);
 }
 
 template <class S>
@@ -628,10 +762,11 @@ KINCAL_EXACT_NOINLINE Status hybrid_exact_ik(const HybridGeometry<S>& nominal, S
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
   S x[6];
-  Status s = serial_start(nominal, up_split, tool, x);
+  S sine[6], cosine[6];
+  Status s = serial_start(nominal, up_split, tool, x, sine, cosine);
   if (s != Status::Ok) return s;
   Pose<S> platform;
-  s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, platform);
+  s = stage_up_and_wrist(nominal, up_split, source_errors, tool, x, sine, cosine, platform);
   if (s != Status::Ok) return s;
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
@@ -675,15 +810,15 @@ FkReport<S> hybrid_exact_fk(const HybridGeometry<S>& nominal, const HybridChains
     Vec3<S> r;
     Mat3<S> M;
     for (int i = 0; i < 3; ++i) {
-      S xu[6];
+      S length = S(0);
       SmallLu<S, 6> lu;
-      const Status s = close_ups(c.ups[i], platform, L, xu, lu, true);
+      const Status s = close_ups(c.ups[i], platform, L, length, lu, true);
       if (s != Status::Ok) {
         report.status = s;
         return report;
       }
       const Vec3<S> P = (platform * c.ups[i].attach).p;
-      r(i) = xu[2] - physical(i);
+      r(i) = length - physical(i);
       for (int k = 0; k < 3; ++k) {  // the UP joint k's twist at the attachment, in close_serial's scaling
         const Vec3<S>& a = axis.direction[k];
         Vec6<S> t = Vec6<S>::Zero();
