@@ -749,6 +749,48 @@ TEST(coreCompensation, FloatAgainstDouble) {
   float_vs_double(with_effects(hybrid_table()), hybrid_pose, "hybrid");
 }
 
+// A stream's state carries the hybrid's exact-IK starts (host,
+// HybridExactWarmStart): with effects and a temperature, along a helix of
+// 0.2 mm steps with a 30 mm jump every 50 points and a refused point in
+// between (an orientation the wrist cannot take), the streamed commands equal
+// those of a fresh state per point (every closure cold) to 1e-9.
+TEST(coreCompensation, AStreamsStartsGiveTheColdCommands) {
+  const HybridCalibrationTable<double> table = with_effects(hybrid_table(true, 31));
+  const HybridCompensator<double> c(table, trust_table_bounds);
+  ASSERT_EQ(c.status(), CS::Ok);
+  Vec6<double> home;
+  ASSERT_EQ(c.home_command(home), CS::Ok);
+  CompensatorState<double> stream = c.start(home);
+  double worst = 0;
+  for (int n = 0; n < 300; ++n) {
+    const double a = 0.01 * n;
+    NcPoint<double> point;
+    point.pose = Pose<double>::from_xyz_rpy(40 * std::cos(a) + (n / 50) * 30.0, 40 * std::sin(a), -50 + 0.05 * n,
+                                            0.03 * std::sin(a), 0.02, 0.0);
+    point.temperature = 20.0 + 0.02 * n;
+    point.has_temperature = true;
+    if (n == 120) point.pose.R = Pose<double>::from_xyz_rpy(0, 0, 0, 0, 3.0, 0).R;  // refused: holds
+    Vec6<double> streamed, cold;
+    CompensatorState<double> fresh = c.start(stream.command, stream.direction);
+    fresh.reference = stream.reference;
+    const CS s_stream = c.compensate(stream, point, streamed);
+    const CS s_cold = c.compensate(fresh, point, cold);
+    ASSERT_EQ(s_stream, s_cold) << n;
+    if (n == 120) {
+      EXPECT_NE(s_stream, CS::Ok);
+      continue;
+    }
+    ASSERT_EQ(s_stream, CS::Ok) << n;
+    worst = std::max(worst, (streamed - cold).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst, 1e-9);
+#if KINCAL_HYBRID_STORED_CHAINS
+  // Most points started from the last one (not the first, the jumps, the
+  // refused point and the one after it).
+  EXPECT_GT(stream.hybrid_start.serial.reused, 280u);
+#endif
+}
+
 // ---- no heap ----------------------------------------------------------------------
 
 TEST(coreCompensationDeathTest, TrapFiresOnDynamicEigen) {

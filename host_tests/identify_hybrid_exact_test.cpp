@@ -150,6 +150,88 @@ TEST(HybridExact, TheTableFormEqualsTheStoredChains) {
   }
 }
 
+// An NC stream's points start from the last one's solution
+// (HybridExactWarmStart): on a random walk of 0–0.8 mm and up to 1 mrad a
+// step (not the benchmark's circle), with a jump of 5–60 mm every 25 points
+// (beyond kHybridWarmReach: those start cold), at 0.1 mm / 0.3 mrad and
+// 1 mm / 2 mrad, the commands equal the cold start's to 1e-9 and identify's
+// nonlinear machine (its own chains and Newton) puts the tool on the pose.
+TEST(HybridExact, AStreamStartsFromItsLastPoint) {
+  const HybridGeometry<double>& g = geometry();
+  const kincal::identify::HybridErrorModel model(g);
+  std::mt19937 rng(67);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const auto& [length, angle] : {std::pair{0.1, 3e-4}, std::pair{1.0, 2e-3}}) {
+    const Eigen::VectorXd errors = random_errors(rng, length, angle);
+    HybridChains<double> c;
+    ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+    kincal::HybridExactWarmStart<double> warm;
+    Pose<double> pose = Pose<double>::from_xyz_rpy(-40, 60, 10, 0.05, -0.03, 0.02);
+    double worst_q = 0, worst_p = 0;
+    int near = 0;
+    for (int n = 0; n < 200; ++n) {
+      if (n % 25 == 24) {  // a jump
+        const Eigen::Vector3d d(u(rng), u(rng), u(rng));
+        pose.p += (5.0 + 55.0 * std::abs(u(rng))) * d.normalized();
+      } else {
+        const Eigen::Vector3d d(u(rng), u(rng), u(rng)), axis(u(rng), u(rng), u(rng));
+        pose.p += 0.8 * std::abs(u(rng)) * d.normalized();
+        pose.R = pose.R * Eigen::AngleAxisd(1e-3 * u(rng), axis.normalized()).toRotationMatrix();
+        if (n > 0) ++near;  // the first point has no last one
+      }
+      pose.p = pose.p.cwiseMax(Eigen::Vector3d(-240, -240, -55)).cwiseMin(Eigen::Vector3d(240, 240, 55));
+      Vec6<double> streamed, cold;
+      HybridPassive<double> passive_streamed, passive_cold;
+      ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, streamed, &passive_streamed, &warm), Status::Ok) << n;
+      ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, cold, &passive_cold), Status::Ok) << n;
+      worst_q = std::max(worst_q, (streamed - cold).cwiseAbs().maxCoeff());
+      EXPECT_LT(std::abs(passive_streamed.extension - passive_cold.extension), 1e-9);
+      Pose<double> reached;
+      ASSERT_EQ(model.actual_fk(errors, streamed, g.home, reached).status, Status::Ok);
+      worst_p = std::max(worst_p, position_gap(reached, pose));
+      EXPECT_LT(rotation_gap(reached, pose), 1e-12) << n;
+    }
+    EXPECT_LT(worst_q, 1e-9) << length << " mm";
+    EXPECT_LT(worst_p, 1e-9) << length << " mm";
+    // The near points did start from the last one (a jump and the first
+    // point did not): every closure of each.
+    EXPECT_EQ(warm.serial.reused, std::uint32_t(near));
+    for (const auto& limb : warm.ups) EXPECT_EQ(limb.reused, std::uint32_t(near));
+  }
+}
+
+// A start that belongs to another machine (a compensator rebuilt at the same
+// address, or a state handed to the wrong one) cannot make the IK wrong: the
+// residual it assumes is not the chain's, and the Newton's own evaluations
+// decide. Machine B's commands from machine A's starts equal B's cold ones.
+TEST(HybridExact, AnotherMachinesStartCannotMisleadTheIk) {
+  const HybridGeometry<double>& g = geometry();
+  std::mt19937 rng(71);
+  const Eigen::VectorXd errors_a = random_errors(rng, 1.0, 2e-3), errors_b = random_errors(rng, 1.0, 2e-3);
+  HybridChains<double> a, b;
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors_a.data(), a), Status::Ok);
+  ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors_b.data(), b), Status::Ok);
+  for (int n = 0; n < 30; ++n) {
+    const Pose<double> pose = random_pose(rng);
+    Pose<double> next = pose;
+    next.p += Eigen::Vector3d(0.3, -0.2, 0.1);
+    kincal::HybridExactWarmStart<double> warm;
+    Vec6<double> q, from_a, cold;
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, a, pose, q, nullptr, &warm), Status::Ok);
+    warm.chains = &b;  // as if b lived where a did
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, b, next, from_a, nullptr, &warm), Status::Ok) << n;
+    ASSERT_EQ(kincal::hybrid_exact_ik(g, b, next, cold), Status::Ok);
+    EXPECT_LT((from_a - cold).cwiseAbs().maxCoeff(), 1e-9) << "pose " << n;
+  }
+  // The address check itself: a start made on a is not used for b.
+  kincal::HybridExactWarmStart<double> warm;
+  Vec6<double> q;
+  ASSERT_EQ(kincal::hybrid_exact_ik(g, a, Pose<double>(), q, nullptr, &warm), Status::Ok);
+  ASSERT_EQ(kincal::hybrid_exact_ik(g, b, Pose<double>(), q, nullptr, &warm), Status::Ok);
+  EXPECT_EQ(warm.chains, &b);
+  EXPECT_EQ(warm.serial.reused, 0u);
+}
+
 TEST(HybridExact, FloatFollowsDouble) {
   const HybridGeometry<double>& g = geometry();
   const HybridGeometry<float> gf = g.cast<float>();

@@ -13,6 +13,8 @@
 // joints move and reverse as in a real NC stream.
 #pragma once
 
+#include <cmath>
+
 #include "bench_cases.hpp"
 #include "kincal/core/compensation.hpp"
 
@@ -77,6 +79,21 @@ template <class S> Pose<S> nc_point(MachineFamily family, int k) {
   const Pose<S> base = family == MachineFamily::Hybrid ? hybrid_target<S>() : stewart_target<S>();
   Pose<S> p = base;
   p.p += Vec3<S>(S(d[k][0]), S(d[k][1]), S(d[k][2]));
+  return p;
+}
+
+// An NC stream: a circle of radius 20 mm about that target, 0.1 mm a point
+// (6 m/min at 1 kHz), the tool tilting ±0.02 rad about x and y as it goes;
+// kPathPointCount points close the circle (the last step is a regular one).
+constexpr int kPathPointCount = 1257;
+template <class S> Pose<S> path_point(MachineFamily family, int k) {
+  const double a = 2 * 3.141592653589793 * k / kPathPointCount;
+  const Pose<S> base = family == MachineFamily::Hybrid ? hybrid_target<S>() : stewart_target<S>();
+  const Pose<S> turn = Pose<S>::from_xyz_rpy(S(20 * std::cos(a)), S(20 * std::sin(a)), S(0), S(0.02 * std::sin(a)),
+                                             S(0.02 * std::cos(a)), S(0));
+  Pose<S> p = base;
+  p.p += turn.p;
+  p.R = base.R * turn.R;
   return p;
 }
 

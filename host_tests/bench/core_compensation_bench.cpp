@@ -7,6 +7,8 @@
 // timed point was accepted.
 #include <benchmark/benchmark.h>
 
+#include <vector>
+
 #include "compensation_cases.hpp"
 
 namespace {
@@ -14,14 +16,18 @@ namespace {
 using namespace kincal;
 using namespace kincal::bench;
 
+// `path`: the points of an NC stream (path_point), each 0.1 mm from the
+// last, instead of nc_point's scattered ones (5–10 mm apart).
 template <class Machine, class S = typename Machine::Scalar>
-void run(benchmark::State& state, const CalibrationTable<Machine>& table, bool temperature) {
+void run(benchmark::State& state, const CalibrationTable<Machine>& table, bool temperature, bool path = false) {
   const Compensator<Machine> c(table, trust_table_bounds);
   Vec6<S> home = Vec6<S>::Zero();
   c.home_command(home);
   CompensatorState<S> s = c.start(home);
-  Pose<S> points[kPointCount];
-  for (int k = 0; k < kPointCount; ++k) points[k] = nc_point<S>(Machine::family, k);
+  const int count = path ? kPathPointCount : kPointCount;
+  std::vector<Pose<S>> points(count);
+  for (int k = 0; k < count; ++k)
+    points[k] = path ? path_point<S>(Machine::family, k) : nc_point<S>(Machine::family, k);
   Vec6<S> q = Vec6<S>::Zero();
   int k = 0;
   for (auto _ : state) {
@@ -33,13 +39,16 @@ void run(benchmark::State& state, const CalibrationTable<Machine>& table, bool t
     const CompensationStatus st = c.compensate(s, p, q);
     benchmark::DoNotOptimize(st);
     benchmark::DoNotOptimize(q);
-    k = (k + 1) % kPointCount;
+    k = (k + 1) % count;
   }
   state.counters["ok"] = c.status() == CompensationStatus::Ok && s.failures() == 0 && s.count(CompensationStatus::Ok) > 0;
 }
 
 template <class S> void BM_CompensateHybrid(benchmark::State& state) {
   run(state, table_cast<S>(hybrid_full_model(false)), false);
+}
+template <class S> void BM_CompensateHybridPath(benchmark::State& state) {
+  run(state, table_cast<S>(hybrid_full_model(false)), false, true);
 }
 template <class S> void BM_CompensateHybridEffects(benchmark::State& state) {
   run(state, table_cast<S>(hybrid_full_model(true)), true);
@@ -82,6 +91,8 @@ template <class S> void BM_ValidateHybridTable(benchmark::State& state) {
 
 BENCHMARK_TEMPLATE(BM_CompensateHybrid, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybrid, float);
+BENCHMARK_TEMPLATE(BM_CompensateHybridPath, double);
+BENCHMARK_TEMPLATE(BM_CompensateHybridPath, float);
 BENCHMARK_TEMPLATE(BM_CompensateHybridEffects, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybridEffects, float);
 BENCHMARK_TEMPLATE(BM_CompensateStewart, double);

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <vector>
 
 #include "compensation_cases.hpp"
 
@@ -22,18 +23,22 @@ template <class T> inline __attribute__((always_inline)) void opaque(T& value) {
   asm volatile("" : "+m"(value) : : "memory");
 }
 
+// `path`: compensation_cases.hpp's NC stream (0.1 mm a point) instead of
+// its scattered points.
 template <class Machine, class S = typename Machine::Scalar>
-int loop(long n, const CalibrationTable<Machine>& table, bool temperature) {
+int loop(long n, const CalibrationTable<Machine>& table, bool temperature, bool path = false) {
   const Compensator<Machine> c(table, trust_table_bounds);
   Vec6<S> home = Vec6<S>::Zero();
   c.home_command(home);
   CompensatorState<S> s = c.start(home);
-  Pose<S> points[kPointCount];
-  for (int k = 0; k < kPointCount; ++k) points[k] = nc_point<S>(Machine::family, k);
+  const int count = path ? kPathPointCount : kPointCount;
+  std::vector<Pose<S>> points(count);
+  for (int k = 0; k < count; ++k)
+    points[k] = path ? path_point<S>(Machine::family, k) : nc_point<S>(Machine::family, k);
   Vec6<S> q = Vec6<S>::Zero();
   for (long i = 0; i < n; ++i) {
     NcPoint<S> p;
-    p.pose = points[i % kPointCount];
+    p.pose = points[i % count];
     p.temperature = S(31.5);
     p.has_temperature = temperature;
     opaque(p);
@@ -53,6 +58,9 @@ struct Operation {
 
 const Operation kOperations[] = {
     {"compensate_hybrid_d", [](long n) { return loop(n, hybrid_full_model(false), false); }},
+    {"compensate_hybrid_path_d", [](long n) { return loop(n, hybrid_full_model(false), false, true); }},
+    {"compensate_hybrid_path_f",
+     [](long n) { return loop(n, table_cast<float>(hybrid_full_model(false)), false, true); }},
     {"compensate_hybrid_effects_d", [](long n) { return loop(n, hybrid_full_model(true), true); }},
     {"compensate_stewart_d", [](long n) { return loop(n, stewart_full_model(false), false); }},
     {"compensate_stewart_effects_d", [](long n) { return loop(n, stewart_full_model(true), true); }},

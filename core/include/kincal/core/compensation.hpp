@@ -86,6 +86,12 @@ template <class Scalar> struct NcPoint {
 };
 
 // What the controller remembers between points (the workspace).
+#if KINCAL_HYBRID_STORED_CHAINS
+template <class S> using CompensatorWarmStart = HybridExactWarmStart<S>;
+#else
+template <class S> struct CompensatorWarmStart {};  // a controller builds each chain per point, from cold
+#endif
+
 template <class Scalar> struct CompensatorState {
   // The last safe joint command: the output of every failed point.
   Vec6<Scalar> command = Vec6<Scalar>::Zero();
@@ -98,6 +104,12 @@ template <class Scalar> struct CompensatorState {
   // counts accepted points.
   std::uint32_t events[kCompensationStatusCount] = {};
   CompensationStatus last = CompensationStatus::Ok;
+#if KINCAL_HYBRID_STORED_CHAINS
+  // The hybrid's exact IK starts each point from the last one's solution
+  // where it is near (hybrid_exact.hpp HybridExactWarmStart; ~2.5 KiB in
+  // double, host only like the stored chains it belongs to).
+  CompensatorWarmStart<Scalar> hybrid_start;
+#endif
 
   std::uint32_t count(CompensationStatus s) const { return events[static_cast<int>(s)]; }
   std::uint32_t failures() const {
@@ -298,7 +310,12 @@ template <class Machine> class Compensator {
   // command on Ok, state.command (held) otherwise.
   CompensationStatus compensate(State& state, const NcPoint<Scalar>& point, Vec6<Scalar>& command) const {
     Vec6<Scalar> q, ideal, dir;
-    const CompensationStatus st = evaluate(state, point, q, ideal, dir);
+#if KINCAL_HYBRID_STORED_CHAINS
+    CompensatorWarmStart<Scalar>* warm = &state.hybrid_start;  // an IK's solution, whatever the later checks say
+#else
+    CompensatorWarmStart<Scalar>* warm = nullptr;
+#endif
+    const CompensationStatus st = evaluate(state, point, q, ideal, dir, warm);
     state.last = st;
     ++state.events[static_cast<int>(st)];
     if (st != CompensationStatus::Ok) {
@@ -329,8 +346,10 @@ template <class Machine> class Compensator {
 
  private:
   // The pipeline without touching the state; outputs written only on Ok.
+  // `warm`: the stream's starts for the hybrid's exact IK (host), or null.
   CompensationStatus evaluate(const State& state, const NcPoint<Scalar>& point, Vec6<Scalar>& command,
-                              Vec6<Scalar>& ideal_out, Vec6<Scalar>& direction_out) const {
+                              Vec6<Scalar>& ideal_out, Vec6<Scalar>& direction_out,
+                              CompensatorWarmStart<Scalar>* warm = nullptr) const {
     using CS = CompensationStatus;
     if (status_ != CS::Ok) return status_;
     if (!point.pose.finite() || (point.has_temperature && !is_finite(point.temperature)) ||
@@ -340,7 +359,7 @@ template <class Machine> class Compensator {
     EffectInputs<Scalar> inputs;
     inputs.load.setZero();
     Vec6<Scalar> nominal_q, ideal;
-    const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load);
+    const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load, warm);
     if (st != CS::Ok) return st;
 
     // Approach directions (backlash): explicit, or the sign of the change of
@@ -381,24 +400,25 @@ template <class Machine> class Compensator {
   // wrenches and Jacobians are off the stack when the IK runs: the
   // controller's worst-case stack is the deeper of the two, not their sum.
   CompensationStatus geometry(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
-                              Vec6<Scalar>& ideal, Vec6<Scalar>& load) const {
+                              Vec6<Scalar>& ideal, Vec6<Scalar>& load, CompensatorWarmStart<Scalar>* warm) const {
     Pose<Scalar> target;
     const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
     if (st != CompensationStatus::Ok) return st;
-    return solve(target, ideal);
+    return solve(target, ideal, warm);
   }
 
   // The IK of the pose handed on by prepare(), non-inlined for the same
   // reason: its locals are not on the stack while prepare() runs. The
   // hybrid's two IKs are separate calls for the same reason: the exact IK's
   // chains and the closed form's frames are never on the stack together.
-  KINCAL_NOINLINE CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
+  KINCAL_NOINLINE CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal,
+                                           [[maybe_unused]] CompensatorWarmStart<Scalar>* warm) const {
     if constexpr (family == MachineFamily::Hybrid) {
       // The identified machine's exact IK (issue #31); with no structural
       // error it is seed 000 Fig. 4's ideal IK with ξ̂.
       if (model_.structural) {
 #if KINCAL_HYBRID_STORED_CHAINS
-        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal));
+        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal, nullptr, warm));
 #else
         return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.up_split, model_.source_errors,
                                                       model_.encoder_offsets, target, ideal));

@@ -25,6 +25,8 @@
 // (seed 000 Eq. (8)).
 #pragma once
 
+#include <cstdint>
+
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/core/pose.hpp"
@@ -495,6 +497,40 @@ template <> struct HybridExactTolerance<float> {
   static constexpr int max_iterations = 12;
 };
 
+// A stream's previous solution as the start of the next point's Newton
+// (host: hybrid_exact_ik's stored-chains form, through CompensatorState).
+// An NC stream moves its tool by well under a millimetre between points;
+// from the previous point's joints, whose chain end is the previous target
+// (closed to HybridExactTolerance::closure), the residual is known without
+// evaluating the chain — target ⊖ previous target — and the LU kept from
+// that Newton is the Jacobian there. One step from it lands where a cold
+// start lands after two: each closure costs one chain evaluation and one
+// LU instead of two of each, and no closed-form start (callgrind, docs/
+// benchmarks.md). Results agree with the cold start's to the closure
+// tolerance; anything the warm Newton cannot close goes the cold way.
+template <class S> struct HybridExactClosureStart {
+  bool valid = false;
+  S x[6] = {}, sine[6] = {}, cosine[6] = {};  // the solution (revolute joints also as sine and cosine)
+  SmallLu<S, 6> lu;     // the Jacobian there (or one step before)
+  bool factorised = false;  // whether `lu` is factorised yet (close_serial's `factorised`)
+  Pose<S> target;                             // what the chain was closed on, in {R0}
+  std::uint32_t reused = 0;                   // closures started here (a diagnostic, and the tests')
+};
+template <class S> struct HybridExactWarmStart {
+  const void* chains = nullptr;  // the HybridChains the starts belong to (another machine's are not used)
+  HybridExactClosureStart<S> serial, ups[3];
+  void clear() {
+    serial.valid = false;
+    for (auto& u : ups) u.valid = false;
+  }
+};
+
+// How far (the scaled residual: mm, rotations × characteristic length) a
+// warm start reaches: a point further from the last one starts cold. 1 mm a
+// point is 60 m/min at 1 kHz; the cold start's own residual is ~0.2 mm at
+// 0.1 mm / 0.3 mrad errors and ~2 mm at 1 mm / 2 mrad.
+template <class S> constexpr S kHybridWarmReach = S(1);
+
 namespace hybrid_exact_detail {
 
 // sin δ and cos δ of a Newton step's angle. A step is mostly below 2⁻¹⁰
@@ -530,11 +566,43 @@ template <class S> bool step_sin_cos(S d, S& sine, S& cosine) {
 // evaluates by (chain_end_turned): each step turns them by the step's
 // angle (angle addition), whose sin_cos is cheap near a solution (|δθ| ≤
 // 1/8: no halvings), instead of a sin_cos of every angle at every evaluation.
+// `warm_error`, if given, is the (scaled) residual at x, where `lu` holds
+// the Jacobian factorised (HybridExactWarmStart): the first step is taken
+// from them without evaluating the chain. `factorised`, if given, says on
+// Ok whether `lu` holds a factorisation (at the last iterate or the one
+// before) or the Jacobian at the solution, not factorised (closed at an
+// evaluation: the next point's warm start factorises it if it needs it).
 template <class S, class Ends>
 Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, S* sine, S* cosine,
-                    SmallLu<S, 6>& lu, bool keep_factorisation = false) {
+                    SmallLu<S, 6>& lu, bool keep_factorisation = false, const Vec6<S>* warm_error = nullptr,
+                    bool* factorised = nullptr) {
+  // x += the step, a revolute joint's sine and cosine turned with it; false
+  // for a diverged step.
+  const auto take_step = [&](const Vec6<S>& step) {
+    for (int j = 0; j < 6; ++j) {
+      if (prismatic[j]) {
+        x[j] += step(j);
+        continue;
+      }
+      const S d = step(j) / L;
+      x[j] += d;
+      S sd, cd;
+      if (!step_sin_cos(d, sd, cd)) return false;
+      const S s = sine[j], c = cosine[j];
+      sine[j] = s * cd + c * sd;
+      cosine[j] = c * cd - s * sd;
+    }
+    return true;
+  };
   S previous = S(0);
-  for (int it = 0;; ++it) {
+  int first = 0;
+  if (warm_error != nullptr) {
+    previous = warm_error->cwiseAbs().maxCoeff();
+    if (!take_step(lu.solve(*warm_error))) return Status::NotConverged;
+    first = 1;
+  }
+  for (int it = first;; ++it) {
+    if (factorised != nullptr) *factorised = false;
     auto J = lu.storage();
     const Pose<S> end = ends(x, sine, cosine, [&J](int j, const auto& a, const auto& p) {
       J.template block<3, 1>(0, j) = p.cross(a);
@@ -557,22 +625,10 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
                                    (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous));
     if (closed && !keep_factorisation) return Status::Ok;
     if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
+    if (factorised != nullptr) *factorised = true;
     if (closed || (it == 0 && err <= HybridExactTolerance<S>::closure)) return Status::Ok;  // (or the start was the solution)
-    if (it == HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
-    const Vec6<S> step = lu.solve(e);
-    for (int j = 0; j < 6; ++j) {
-      if (prismatic[j]) {
-        x[j] += step(j);
-        continue;
-      }
-      const S d = step(j) / L;
-      x[j] += d;
-      S sd, cd;
-      if (!step_sin_cos(d, sd, cd)) return Status::NotConverged;  // a diverged step
-      const S s = sine[j], c = cosine[j];
-      sine[j] = s * cd + c * sd;
-      cosine[j] = c * cd - s * sd;
-    }
+    if (it >= HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
+    if (!take_step(lu.solve(e))) return Status::NotConverged;  // a diverged step
     // Newton converges quadratically here, r_{k+1} ≈ K·r_k² with K ≈
     // r_k / r_{k−1}² seen on the last step: when the residual this step
     // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
@@ -586,21 +642,65 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
   }
 }
 
+// The closure from the stream's previous solution `w` (HybridExactWarmStart):
+// Ok with x, sine, cosine at the solution and `w` moved there; anything else
+// (no start, a point beyond kHybridWarmReach, a Newton that fails) leaves `w`
+// invalid for the caller's cold start.
+template <class S, class Ends>
+Status close_from_previous(Ends ends, const bool* prismatic, const Pose<S>& target, S L, HybridExactClosureStart<S>& w,
+                           S* x, S* sine, S* cosine) {
+  if (!w.valid) return Status::NotConverged;
+  w.valid = false;
+  Vec6<S> e = closure_residual(target, w.target);
+  e.template tail<3>() *= L;
+  if (!(e.cwiseAbs().maxCoeff() <= kHybridWarmReach<S>)) return Status::NotConverged;
+  if (!w.factorised && (!w.lu.factor() || !(w.lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)))
+    return Status::Singular;
+  for (int j = 0; j < 6; ++j) x[j] = w.x[j], sine[j] = w.sine[j], cosine[j] = w.cosine[j];
+  const Status s = close_serial(ends, prismatic, target, L, x, sine, cosine, w.lu, false, &e, &w.factorised);
+  if (s != Status::Ok) return s;
+  for (int j = 0; j < 6; ++j) w.x[j] = x[j], w.sine[j] = sine[j], w.cosine[j] = cosine[j];
+  w.target = target;
+  w.valid = true;
+  ++w.reused;
+  return s;
+}
+
+// A cold closure's solution kept as the next point's start (its Newton's
+// Jacobian is in w.lu, factorised or not as w.factorised says).
+template <class S>
+void keep_start(HybridExactClosureStart<S>& w, const Pose<S>& target, const S* x, const S* sine, const S* cosine) {
+  for (int j = 0; j < 6; ++j) w.x[j] = x[j], w.sine[j] = sine[j], w.cosine[j] = cosine[j];
+  w.target = target;
+  w.valid = true;
+}
+
 // UPS limb `limb` closed on the platform pose `platform` (in {R0}): its
 // prismatic variable, the leg's length (written on Ok), Newton from the
 // nominal closed form (its angles are never needed: only their sines and
-// cosines, nominal_ups_start).
+// cosines, nominal_ups_start), or from the stream's previous solution
+// `warm` if given and near.
 template <class S>
 Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& length, SmallLu<S, 6>& lu,
-                 bool keep_factorisation = false) {
+                 bool keep_factorisation = false, HybridExactClosureStart<S>* warm = nullptr) {
   const Pose<S> target = platform * limb.attach;
   S x[6] = {}, sine[6], cosine[6];
-  if (!nominal_ups_start(limb.origin, limb.axes, target, x[2], sine, cosine)) return Status::Unreachable;
   auto ends = [&](const S* xs, const S* sn, const S* cs, auto&& visit) {
     return chain_end_turned<true>(limb.links, kUpsPrismatic, static_cast<const Pose<S>*>(nullptr), xs, sn, cs, visit);
   };
-  const Status s = close_serial(ends, kUpsPrismatic, target, L, x, sine, cosine, lu, keep_factorisation);
-  if (s == Status::Ok) length = x[2];
+  if (warm != nullptr && close_from_previous(ends, kUpsPrismatic, target, L, *warm, x, sine, cosine) == Status::Ok) {
+    length = x[2];
+    return Status::Ok;
+  }
+  x[0] = x[1] = x[3] = x[4] = x[5] = S(0);
+  if (!nominal_ups_start(limb.origin, limb.axes, target, x[2], sine, cosine)) return Status::Unreachable;
+  const Status s = close_serial(ends, kUpsPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
+                                keep_factorisation, static_cast<const Vec6<S>*>(nullptr),
+                                warm != nullptr ? &warm->factorised : nullptr);
+  if (s == Status::Ok) {
+    length = x[2];
+    if (warm != nullptr) keep_start(*warm, target, x, sine, cosine);
+  }
   return s;
 }
 
@@ -641,10 +741,14 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
 // controller's stage_up_and_wrist its frame and build_serial_chains's are
 // then apart (inlined at -Os, the stage's stack was 4 540 B, over the bar;
 // examples/firmware/footprint.sh, 2026-11-28).
+// With `warm` (the host's stream): `from_previous` closes from the stream's
+// previous solution only (NotConverged if it cannot: the caller then starts
+// cold), otherwise a cold closure's solution is kept in `warm`.
 template <class S>
 KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
                           const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, S* sine, S* cosine,
-                          Pose<S>& platform) {
+                          Pose<S>& platform, HybridExactClosureStart<S>* warm = nullptr,
+                          bool from_previous = false) {
   // The target in {R0} (the inverse of Eq. (8)'s map into {R}).
   const Mat3<S> Rt = nominal.workpiece_rotation.transpose();
   Pose<S> target;
@@ -656,9 +760,16 @@ KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal
                                    [&visit](int j, const auto& a, const auto& p) { visit(3 + j, a, p); });
   };
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
-  SmallLu<S, 6> lu;
-  const Status closed =
-      close_serial(serial, kSerialPrismatic, target, nominal.characteristic_length, x, sine, cosine, lu);
+  const S L = nominal.characteristic_length;
+  Status closed;
+  if (from_previous) {
+    closed = close_from_previous(serial, kSerialPrismatic, target, L, *warm, x, sine, cosine);
+  } else {
+    SmallLu<S, 6> lu;
+    closed = close_serial(serial, kSerialPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
+                          false, static_cast<const Vec6<S>*>(nullptr), warm != nullptr ? &warm->factorised : nullptr);
+    if (closed == Status::Ok && warm != nullptr) keep_start(*warm, target, x, sine, cosine);
+  }
   if (closed == Status::Ok)  // the platform at the solution: the UP limb only (the wrist does not move it)
     platform = chain_end_turned<false>(up, kUpPrismatic, static_cast<const Pose<S>*>(nullptr), x, sine, cosine,
                                        [](int, const auto&, const auto&) {});
@@ -689,22 +800,37 @@ Status exact_commands(const HybridGeometry<S>& nominal, const Vec6<S>& physical,
 // and `passive` only on Ok. InvalidInput (non-finite), Unreachable /
 // Singular (as hybrid_ik, or a chain that loses rank), NotConverged,
 // OutOfLimits (a command or the UP extension outside `nominal`'s limits).
+// `warm`, if given (a stream's HybridExactWarmStart), starts each closure
+// from the stream's previous solution where it is near and keeps this one's
+// for the next point.
 template <class S>
 Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& c, const Pose<S>& tool, Vec6<S>& q,
-                       NonDeducedT<HybridPassive<S>>* passive = nullptr) {
+                       NonDeducedT<HybridPassive<S>>* passive = nullptr,
+                       NonDeducedT<HybridExactWarmStart<S>>* warm = nullptr) {
   using namespace hybrid_exact_detail;
   if (!tool.finite()) return Status::InvalidInput;
+  if (warm != nullptr && warm->chains != &c) {
+    warm->clear();
+    warm->chains = &c;
+  }
   S x[6];
   S sine[6], cosine[6];
-  Status s = serial_start(nominal, c.up_split, tool, x, sine, cosine);
-  if (s != Status::Ok) return s;
   Pose<S> platform;
-  s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform);
-  if (s != Status::Ok) return s;
+  Status s = warm != nullptr ? close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
+                                                  &warm->serial, true)
+                             : Status::NotConverged;
+  if (s != Status::Ok) {
+    s = serial_start(nominal, c.up_split, tool, x, sine, cosine);
+    if (s != Status::Ok) return s;
+    s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
+                           warm != nullptr ? &warm->serial : nullptr);
+    if (s != Status::Ok) return s;
+  }
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
     SmallLu<S, 6> lu;
-    s = close_ups(c.ups[i], platform, nominal.characteristic_length, physical(i), lu);
+    s = close_ups(c.ups[i], platform, nominal.characteristic_length, physical(i), lu, false,
+                  warm != nullptr ? &warm->ups[i] : nullptr);
     if (s != Status::Ok) return s;
   }
   for (int j = 0; j < 3; ++j) physical(3 + j) = x[3 + j];
