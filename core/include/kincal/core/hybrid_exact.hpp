@@ -566,43 +566,51 @@ template <class S> bool step_sin_cos(S d, S& sine, S& cosine) {
 // evaluates by (chain_end_turned): each step turns them by the step's
 // angle (angle addition), whose sin_cos is cheap near a solution (|δθ| ≤
 // 1/8: no halvings), instead of a sin_cos of every angle at every evaluation.
+// x += a Newton step (revolute joints scaled by L), a revolute joint's sine
+// and cosine turned with it; false for a diverged step.
+template <class S>
+inline bool take_newton_step(const Vec6<S>& step, const bool* prismatic, S L, S* x, S* sine, S* cosine) {
+  for (int j = 0; j < 6; ++j) {
+    if (prismatic[j]) {
+      x[j] += step(j);
+      continue;
+    }
+    const S d = step(j) / L;
+    x[j] += d;
+    S sd, cd;
+    if (!step_sin_cos(d, sd, cd)) return false;
+    const S s = sine[j], c = cosine[j];
+    sine[j] = s * cd + c * sd;
+    cosine[j] = c * cd - s * sd;
+  }
+  return true;
+}
+
 // `warm_error`, if given, is the (scaled) residual at x, where `lu` holds
 // the Jacobian factorised (HybridExactWarmStart): the first step is taken
 // from them without evaluating the chain. `factorised`, if given, says on
 // Ok whether `lu` holds a factorisation (at the last iterate or the one
 // before) or the Jacobian at the solution, not factorised (closed at an
 // evaluation: the next point's warm start factorises it if it needs it).
-template <class S, class Ends>
+// Both only with `kStream` (the host's stream, HybridExactWarmStart): the
+// controller's instantiation has no code for them (704 B of flash at -Os,
+// over the firmware's bar; examples/firmware/footprint.sh, 2026-11-28).
+template <bool kStream = false, class S, class Ends>
 Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x, S* sine, S* cosine,
                     SmallLu<S, 6>& lu, bool keep_factorisation = false, const Vec6<S>* warm_error = nullptr,
                     bool* factorised = nullptr) {
-  // x += the step, a revolute joint's sine and cosine turned with it; false
-  // for a diverged step.
-  const auto take_step = [&](const Vec6<S>& step) {
-    for (int j = 0; j < 6; ++j) {
-      if (prismatic[j]) {
-        x[j] += step(j);
-        continue;
-      }
-      const S d = step(j) / L;
-      x[j] += d;
-      S sd, cd;
-      if (!step_sin_cos(d, sd, cd)) return false;
-      const S s = sine[j], c = cosine[j];
-      sine[j] = s * cd + c * sd;
-      cosine[j] = c * cd - s * sd;
-    }
-    return true;
-  };
   S previous = S(0);
   int first = 0;
-  if (warm_error != nullptr) {
-    previous = warm_error->cwiseAbs().maxCoeff();
-    if (!take_step(lu.solve(*warm_error))) return Status::NotConverged;
-    first = 1;
+  if constexpr (kStream) {
+    if (warm_error != nullptr) {
+      previous = warm_error->cwiseAbs().maxCoeff();
+      if (!take_newton_step(lu.solve(*warm_error), prismatic, L, x, sine, cosine)) return Status::NotConverged;
+      first = 1;
+    }
   }
   for (int it = first;; ++it) {
-    if (factorised != nullptr) *factorised = false;
+    if constexpr (kStream)
+      if (factorised != nullptr) *factorised = false;
     auto J = lu.storage();
     const Pose<S> end = ends(x, sine, cosine, [&J](int j, const auto& a, const auto& p) {
       J.template block<3, 1>(0, j) = p.cross(a);
@@ -625,10 +633,11 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
                                    (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous));
     if (closed && !keep_factorisation) return Status::Ok;
     if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
-    if (factorised != nullptr) *factorised = true;
+    if constexpr (kStream)
+      if (factorised != nullptr) *factorised = true;
     if (closed || (it == 0 && err <= HybridExactTolerance<S>::closure)) return Status::Ok;  // (or the start was the solution)
     if (it >= HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
-    if (!take_step(lu.solve(e))) return Status::NotConverged;  // a diverged step
+    if (!take_newton_step(lu.solve(e), prismatic, L, x, sine, cosine)) return Status::NotConverged;  // diverged
     // Newton converges quadratically here, r_{k+1} ≈ K·r_k² with K ≈
     // r_k / r_{k−1}² seen on the last step: when the residual this step
     // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
@@ -640,6 +649,16 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
       return Status::Ok;
     previous = err;
   }
+}
+
+// close_serial in a frame of its own: inlined into a UPS limb's closure,
+// GCC -Os put the Newton's locals and the start's (nominal_ups_start) on
+// the stack together: 4 120 B, over the controller's bar (4 000 B apart;
+// examples/firmware/footprint.sh, 2026-11-28).
+template <class S, class Ends>
+KINCAL_EXACT_NOINLINE Status close_serial_apart(Ends ends, const bool* prismatic, const Pose<S>& target, S L, S* x,
+                                                S* sine, S* cosine, SmallLu<S, 6>& lu, bool keep_factorisation) {
+  return close_serial(ends, prismatic, target, L, x, sine, cosine, lu, keep_factorisation);
 }
 
 // The closure from the stream's previous solution `w` (HybridExactWarmStart):
@@ -657,7 +676,7 @@ Status close_from_previous(Ends ends, const bool* prismatic, const Pose<S>& targ
   if (!w.factorised && (!w.lu.factor() || !(w.lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)))
     return Status::Singular;
   for (int j = 0; j < 6; ++j) x[j] = w.x[j], sine[j] = w.sine[j], cosine[j] = w.cosine[j];
-  const Status s = close_serial(ends, prismatic, target, L, x, sine, cosine, w.lu, false, &e, &w.factorised);
+  const Status s = close_serial<true>(ends, prismatic, target, L, x, sine, cosine, w.lu, false, &e, &w.factorised);
   if (s != Status::Ok) return s;
   for (int j = 0; j < 6; ++j) w.x[j] = x[j], w.sine[j] = sine[j], w.cosine[j] = cosine[j];
   w.target = target;
@@ -679,8 +698,8 @@ void keep_start(HybridExactClosureStart<S>& w, const Pose<S>& target, const S* x
 // prismatic variable, the leg's length (written on Ok), Newton from the
 // nominal closed form (its angles are never needed: only their sines and
 // cosines, nominal_ups_start), or from the stream's previous solution
-// `warm` if given and near.
-template <class S>
+// `warm` if given and near (`kStream` only: the host's stream).
+template <bool kStream = false, class S>
 Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& length, SmallLu<S, 6>& lu,
                  bool keep_factorisation = false, HybridExactClosureStart<S>* warm = nullptr) {
   const Pose<S> target = platform * limb.attach;
@@ -688,18 +707,25 @@ Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& 
   auto ends = [&](const S* xs, const S* sn, const S* cs, auto&& visit) {
     return chain_end_turned<true>(limb.links, kUpsPrismatic, static_cast<const Pose<S>*>(nullptr), xs, sn, cs, visit);
   };
-  if (warm != nullptr && close_from_previous(ends, kUpsPrismatic, target, L, *warm, x, sine, cosine) == Status::Ok) {
-    length = x[2];
-    return Status::Ok;
+  if constexpr (kStream) {
+    if (warm != nullptr && close_from_previous(ends, kUpsPrismatic, target, L, *warm, x, sine, cosine) == Status::Ok) {
+      length = x[2];
+      return Status::Ok;
+    }
+    x[0] = x[1] = x[3] = x[4] = x[5] = S(0);
   }
-  x[0] = x[1] = x[3] = x[4] = x[5] = S(0);
   if (!nominal_ups_start(limb.origin, limb.axes, target, x[2], sine, cosine)) return Status::Unreachable;
-  const Status s = close_serial(ends, kUpsPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
-                                keep_factorisation, static_cast<const Vec6<S>*>(nullptr),
-                                warm != nullptr ? &warm->factorised : nullptr);
+  Status s;
+  if constexpr (kStream)
+    s = close_serial<true>(ends, kUpsPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
+                           keep_factorisation, static_cast<const Vec6<S>*>(nullptr),
+                           warm != nullptr ? &warm->factorised : nullptr);
+  else
+    s = close_serial_apart(ends, kUpsPrismatic, target, L, x, sine, cosine, lu, keep_factorisation);
   if (s == Status::Ok) {
     length = x[2];
-    if (warm != nullptr) keep_start(*warm, target, x, sine, cosine);
+    if constexpr (kStream)
+      if (warm != nullptr) keep_start(*warm, target, x, sine, cosine);
   }
   return s;
 }
@@ -744,7 +770,7 @@ KINCAL_EXACT_NOINLINE Status serial_start(const HybridGeometry<S>& nominal, S up
 // With `warm` (the host's stream): `from_previous` closes from the stream's
 // previous solution only (NotConverged if it cannot: the caller then starts
 // cold), otherwise a cold closure's solution is kept in `warm`.
-template <class S>
+template <bool kStream = false, class S>
 KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal, const HybridSerialLinks<S>& up,
                           const HybridSerialLinks<S>& wrist, const Pose<S>& tool, S* x, S* sine, S* cosine,
                           Pose<S>& platform, HybridExactClosureStart<S>* warm = nullptr,
@@ -762,13 +788,19 @@ KINCAL_EXACT_NOINLINE Status close_up_and_wrist(const HybridGeometry<S>& nominal
   constexpr bool kSerialPrismatic[6] = {false, false, true, false, false, false};
   const S L = nominal.characteristic_length;
   Status closed;
-  if (from_previous) {
-    closed = close_from_previous(serial, kSerialPrismatic, target, L, *warm, x, sine, cosine);
+  if constexpr (kStream) {
+    if (from_previous) {
+      closed = close_from_previous(serial, kSerialPrismatic, target, L, *warm, x, sine, cosine);
+    } else {
+      SmallLu<S, 6> lu;
+      closed = close_serial<true>(serial, kSerialPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
+                                  false, static_cast<const Vec6<S>*>(nullptr),
+                                  warm != nullptr ? &warm->factorised : nullptr);
+      if (closed == Status::Ok && warm != nullptr) keep_start(*warm, target, x, sine, cosine);
+    }
   } else {
     SmallLu<S, 6> lu;
-    closed = close_serial(serial, kSerialPrismatic, target, L, x, sine, cosine, warm != nullptr ? warm->lu : lu,
-                          false, static_cast<const Vec6<S>*>(nullptr), warm != nullptr ? &warm->factorised : nullptr);
-    if (closed == Status::Ok && warm != nullptr) keep_start(*warm, target, x, sine, cosine);
+    closed = close_serial(serial, kSerialPrismatic, target, L, x, sine, cosine, lu);
   }
   if (closed == Status::Ok)  // the platform at the solution: the UP limb only (the wrist does not move it)
     platform = chain_end_turned<false>(up, kUpPrismatic, static_cast<const Pose<S>*>(nullptr), x, sine, cosine,
@@ -816,20 +848,20 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   S x[6];
   S sine[6], cosine[6];
   Pose<S> platform;
-  Status s = warm != nullptr ? close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
+  Status s = warm != nullptr ? close_up_and_wrist<true>(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
                                                   &warm->serial, true)
                              : Status::NotConverged;
   if (s != Status::Ok) {
     s = serial_start(nominal, c.up_split, tool, x, sine, cosine);
     if (s != Status::Ok) return s;
-    s = close_up_and_wrist(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
-                           warm != nullptr ? &warm->serial : nullptr);
+    s = close_up_and_wrist<true>(nominal, c.up, c.wrist, tool, x, sine, cosine, platform,
+                                 warm != nullptr ? &warm->serial : nullptr);
     if (s != Status::Ok) return s;
   }
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
     SmallLu<S, 6> lu;
-    s = close_ups(c.ups[i], platform, nominal.characteristic_length, physical(i), lu, false,
+    s = close_ups<true>(c.ups[i], platform, nominal.characteristic_length, physical(i), lu, false,
                   warm != nullptr ? &warm->ups[i] : nullptr);
     if (s != Status::Ok) return s;
   }
