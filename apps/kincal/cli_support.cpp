@@ -96,13 +96,13 @@ std::vector<Eigen::Vector3d> kincal_app::target_list(const std::string& text, co
   return out;
 }
 
-std::vector<std::string> kincal_app::effect_list(const std::string& list) {
+std::vector<std::string> kincal_app::effect_list(const ki::Robot& robot, const std::string& list) {
   std::vector<std::string> names;
   std::stringstream in(list);
   for (std::string name; std::getline(in, name, ',');) {
     if (name.empty()) continue;
-    if (ki::find_effect(name) == nullptr)
-      throw ki::InputError("--effects: unknown effect '" + name + "' (known: " + ki::effect_names() + ")");
+    if (ki::find_effect(robot, name) == nullptr)
+      throw ki::InputError("--effects: unknown effect '" + name + "' (known: " + ki::effect_names(robot) + ")");
     if (std::find(names.begin(), names.end(), name) != names.end())
       throw ki::InputError("--effects: '" + name + "' is named twice");
     names.push_back(name);
@@ -115,6 +115,7 @@ ki::PoseTable kincal_app::read_measurements(const ki::Robot& robot, const std::s
   ki::PoseTableOptions options;
   options.joint_count = ki::Robot::joint_count();
   options.warn = warn;
+  options.input_columns = robot.formula_inputs;
   ki::PoseTable data = ki::read_pose_table(path, options);
   if (instrument_frame) {
     if (!data.has_targets)

@@ -29,7 +29,7 @@ CLI::Validator decimal(double lo, double hi, bool open_low = false);
 bool strict_decimal(const std::string& text, double& out);
 CLI::Validator whole_number(long long lo);
 // An effect list (`--effects a,b`): known effects, each once.
-std::vector<std::string> effect_list(const std::string& list);
+std::vector<std::string> effect_list(const kincal::identify::Robot& robot, const std::string& list);
 
 // One warning on stderr, on one line whatever strings from the input it quotes.
 void warn(const std::string& line);

@@ -62,6 +62,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   }
   ki::PoseTableOptions options;
   options.warn = warn;
+  options.input_columns = model.nominal.formula_inputs;
   const ki::PoseTable poses = ki::read_pose_table(poses_path, options);
   ki::PoseTable out;
   out.file = out_path;
@@ -72,6 +73,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
   // (temperature for thermal, time stamps) in the same file.
   out.has_temp = poses.has_temp;
   out.has_time = poses.has_time;
+  out.input_names = poses.input_names;
   // The controller's own routine on the table the firmware gets.
   ki::CompensatedStream stream;
   try {
@@ -92,6 +94,7 @@ int run_compensate(const std::string& robot_name, const std::string& model_path,
     o.commanded = r.commanded;
     o.temp = r.temp;
     o.time = r.time;
+    o.inputs = r.inputs;
     o.status = kincal::to_string(c.status);
     if (c.status == kincal::CompensationStatus::Ok) {
       o.q = Eigen::VectorXd(c.q);

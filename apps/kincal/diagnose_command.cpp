@@ -78,7 +78,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   opt.alpha = a.alpha;
   opt.progress = !a.quiet;
   opt.keep_outliers = a.keep_outliers;
-  if (!a.effects.empty()) opt.candidates = effect_list(a.effects);
+  if (!a.effects.empty()) opt.candidates = effect_list(robot, a.effects);
 
   ki::Diagnosis d = ki::diagnose(robot, data, opt);
   ki::add_plan_hints(robot, d);  // what planned poses would do for an effect the data cannot tell from the base

@@ -29,7 +29,7 @@ int run_effects(const EffectsArgs& a) {
   const ki::Robot robot = ki::load_robot(a.robot.empty() ? std::string("stewart-seed001") : a.robot);
   const kincal::EffectParameters<double> frame = ki::effect_frame(robot);
   nlohmann::json list = nlohmann::json::array();
-  for (const auto& effect : ki::effect_registry()) {
+  for (const ki::Effect* effect : ki::effect_candidates(robot)) {
     nlohmann::json e;
     e["name"] = effect->name();
     e["description"] = effect->description();

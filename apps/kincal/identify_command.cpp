@@ -497,7 +497,7 @@ int run_identify(const IdentifyArgs& a) {
       throw ki::InputError("--ridge-k applies to --estimator ridge (the estimator is " +
                            (a.estimator.empty() ? std::string("ols") : a.estimator) + ")");
     const double k = a.ridge_k.empty() || a.ridge_k == "gcv" ? 0.0 : std::stod(a.ridge_k);  // checked by the option
-    (void)kincal_app::effect_list(a.effects);  // known, each once (an effect named twice held its parameters at 0)
+    (void)kincal_app::effect_list(robot, a.effects);  // known, each once (an effect named twice held its parameters at 0)
     return kincal_app::run_identify_with_effects(robot, a.data, a.out, a.effects, a.estimator, a.json, a.effect_alpha,
                                                  k, a.keep_outliers, a.instrument_frame);
   }

@@ -20,7 +20,7 @@ namespace kincal_app {
 int run_identify_with_effects(const ki::Robot& robot, const std::string& data_path, const std::string& out,
                               const std::string& effects, const std::string& estimator, const std::string& json_path,
                               double effect_alpha, double ridge_k, bool keep_outliers, bool instrument_frame) {
-  const std::vector<std::string> names = effect_list(effects);
+  const std::vector<std::string> names = effect_list(robot, effects);
   const ki::PoseTable data = read_measurements(robot, data_path, instrument_frame);
   std::cout << "identify: " << data_path << ", robot " << robot.name << " with effects " << effects << "\n";
   ki::EffectCalibrationOptions opt;
@@ -70,7 +70,7 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   std::cout << "  final: cal " << report.rms_cal_um_final << " um, test " << report.rms_test_um_final << " um\n";
   nlohmann::ordered_json values = nlohmann::ordered_json::object();
   for (const auto& [name, v] : model.effects.values) {
-    const std::vector<std::string> pn = ki::find_effect(name)->parameter_names(robot);
+    const std::vector<std::string> pn = ki::find_effect(robot, name)->parameter_names(robot);
     std::cout << "  " << name << ":";
     for (std::size_t i = 0; i < pn.size(); ++i) {
       std::cout << " " << pn[i] << "=" << v(Eigen::Index(i));

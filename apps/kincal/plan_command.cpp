@@ -106,12 +106,13 @@ int run_plan(const PlanArgs& a) {
 
   ki::PlanOptions o;
   o.count = a.count;
-  if (!a.effects.empty()) o.effects = effect_list(a.effects);
+  if (!a.effects.empty()) o.effects = effect_list(robot, a.effects);
   o.measure = a.measure.empty() ? ki::PlanMeasure::Default
                                 : (a.measure == "pose" ? ki::PlanMeasure::Pose : ki::PlanMeasure::Targets);
   if (!a.candidates.empty()) {
     ki::PoseTableOptions po;
     po.warn = warn;
+    po.input_columns = robot.formula_inputs;
     o.candidates = ki::read_pose_table(a.candidates, po);
     if (o.candidates.rows.empty()) throw ki::InputError(a.candidates, 0, 0, "no candidate poses");
   }

@@ -35,6 +35,7 @@ int run_simulate(const SimulateArgs& a) {
   ki::PoseTableOptions popt;
   popt.joint_count = ki::Robot::joint_count();
   popt.warn = warn;
+  popt.input_columns = nominal.formula_inputs;
   const ki::PoseTable poses = ki::read_pose_table(a.poses, popt);
 
   ki::SimulateOptions sopt;

@@ -537,7 +537,7 @@ void DiagnosisRun::stack_candidates() {
     d.notes.push_back("no test rows: effects are accepted on significance alone (no held-out check)");
 
   // Candidate effects and their columns.
-  for (const auto& e : effect_registry()) {
+  for (const Effect* e : effect_candidates(robot)) {
     if (!options.candidates.empty() &&
         std::find(options.candidates.begin(), options.candidates.end(), e->name()) == options.candidates.end())
       continue;
@@ -753,9 +753,13 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   if (same_nodes) {
     Stack cal2, test2;
     build_stacks(moved, cal2, test2);
+    // The accepted effects' columns at their fitted values (a formula
+    // effect's depend on them), the others' at their start.
+    const EffectParameters<double> fitted = m.effects.to_core(robot);
     for (const Effect* e : candidates) {
-      cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false);
-      test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true);
+      const bool is_accepted = std::find(accepted.begin(), accepted.end(), e->name()) != accepted.end();
+      cal2.G[e->name()] = detail::effect_columns(robot, *e, moved, false, is_accepted ? &fitted : nullptr);
+      test2.G[e->name()] = detail::effect_columns(robot, *e, moved, true, is_accepted ? &fitted : nullptr);
     }
     auto moved_design = std::make_unique<const CurrentDesign>(design(cal2, accepted));
     const FitResult moved_fit = fit_on(*moved_design, cal2, test2, accepted);
@@ -839,12 +843,14 @@ void DiagnosisRun::read_accepted_values() {
   // Accepted effect values from the final fit.
   Index c = base.parameters;
   for (const std::string& a : accepted) {
-    const std::vector<std::string> names = find_effect(a)->parameter_names(robot);
+    const Effect* e = find_effect(robot, a);
+    const std::vector<std::string> names = e->parameter_names(robot);
     const auto start_it = effect_start.find(a);
+    // The linear step is from the effect's start (0 but for a formula's
+    // `start`) or from the values of the re-linearisation.
+    const VectorXd start = start_it != effect_start.end() ? start_it->second : e->start_values(robot);
     for (std::size_t j = 0; j < names.size(); ++j)
-      d.accepted_parameters.emplace_back(
-          a + ":" + names[j],
-          current.coef(c + Index(j)) + (start_it != effect_start.end() ? start_it->second(Index(j)) : 0.0));
+      d.accepted_parameters.emplace_back(a + ":" + names[j], current.coef(c + Index(j)) + start(Index(j)));
     c += Index(names.size());
   }
 }

@@ -162,7 +162,7 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
   for (std::size_t k = 0; k < out.rows.size(); ++k) {
     PoseRow& row = out.rows[k];
     if (!nodes[k]) continue;
-    row.q = Eigen::VectorXd(effect_actual_joints(e, *nodes[k]));
+    row.q = Eigen::VectorXd(effect_actual_joints(robot, e, *nodes[k]));
     if (!row.temp || e.thermal == 0) continue;
     // The thermal effect moves the reached pose (core thermal_reached: the
     // position scaled about the thermal origin, no rotation), so a measured
@@ -181,8 +181,10 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
   return out;
 }
 
-MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseModel& base, bool test) {
-  const EffectParameters<double> frame = effect_frame(robot);
+MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseModel& base, bool test,
+                        const EffectParameters<double>* at) {
+  EffectParameters<double> frame = at != nullptr ? *at : effect_frame(robot);
+  if (at == nullptr) effect.apply(robot, effect.start_values(robot), frame);  // (zero but for a formula's `start`)
   const Index k = Index(effect.parameter_names(robot).size());
   Index rows = 0;
   for (const NodeData& n : base.nodes)

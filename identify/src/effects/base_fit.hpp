@@ -179,7 +179,10 @@ CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& dat
                                         BaseModel* base_out, SteppedBaseFit* from = nullptr);
 
 // Effect columns of the nodes of `base` whose role matches `test`, stacked
-// like their residuals.
-Eigen::MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseModel& base, bool test);
+// like their residuals, at the effect values `at` (nullptr: every value zero,
+// a formula effect's at its start values — the columns of an effect
+// nonlinear in its parameters depend on them).
+Eigen::MatrixXd effect_columns(const Robot& robot, const Effect& effect, const BaseModel& base, bool test,
+                               const EffectParameters<double>* at = nullptr);
 
 }  // namespace kincal::identify::detail

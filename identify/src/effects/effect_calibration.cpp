@@ -37,13 +37,16 @@ double rms_um(const VectorXd& v) { return v.size() > 0 ? std::sqrt(v.squaredNorm
 using detail::stack;
 
 // [H G]: the base design and the columns of the effect parameters not held.
+// The effects' columns are taken at their current `values` (a formula
+// effect may be nonlinear in its parameters).
 MatrixXd joint_design(const Robot& robot, const std::vector<const Effect*>& list,
                       const std::map<std::string, std::vector<bool>>& held, const detail::BaseModel& base,
-                      const MatrixXd& H) {
+                      const MatrixXd& H, const EffectValues& values) {
   std::vector<MatrixXd> G;
   Index cols = H.cols();
+  const EffectParameters<double> at = values.to_core(robot);
   for (const Effect* e : list) {
-    G.push_back(detail::effect_columns(robot, *e, base, false));
+    G.push_back(detail::effect_columns(robot, *e, base, false, &at));
     for (bool h : held.at(e->name())) cols += h ? 0 : 1;
   }
   MatrixXd X(H.rows(), cols);
@@ -69,7 +72,7 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   MatrixXd H;
   VectorXd y;
   stack(base, false, H, y);
-  const MatrixXd X = joint_design(robot, list, held, base, H);
+  const MatrixXd X = joint_design(robot, list, held, base, H, values);
   const Index free = X.cols() - H.cols();
   if (free == 0 || X.rows() == 0) return std::nullopt;
   VectorXd scale(X.cols());
@@ -145,7 +148,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
     // One linear step on [H G] (G: the effects' free columns), column-scaled,
     // by a rank-revealing orthogonal decomposition; only the effect part is
     // kept, the base is refitted nonlinearly in the next pass.
-    const MatrixXd X = joint_design(robot, list, held, base, H);
+    const MatrixXd X = joint_design(robot, list, held, base, H, values);
     const VectorXd delta = detail::scaled_least_squares(X, y);
     // Convergence on the effect's contribution to the residual (scaled update).
     VectorXd scaled_effect_step = delta.tail(X.cols() - H.cols());
@@ -245,7 +248,7 @@ detail::BaseModel joint_fit(const Robot& robot, const PoseTable& data, const std
         MatrixXd H;
         stack(base, false, H, y);
         rep.rms_cal_um.push_back(rms_um(y));
-        X = joint_design(robot, list, held, base, H);
+        X = joint_design(robot, list, held, base, H, values);
         detail::append_penalty_rows(fit, X, y);
       },
       [&](const VectorXd& delta) {
@@ -280,8 +283,8 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
                                                 SteppedBaseFit* from) {
   std::vector<const Effect*> list;
   for (const std::string& name : effects) {
-    const Effect* e = find_effect(name);
-    if (e == nullptr) throw InputError("--effects: unknown effect '" + name + "' (known: " + effect_names() + ")");
+    const Effect* e = find_effect(robot, name);
+    if (e == nullptr) throw InputError("--effects: unknown effect '" + name + "' (known: " + effect_names(robot) + ")");
     const std::string missing = e->missing_inputs(data);
     if (!missing.empty()) throw InputError(data.file, 0, 0, "effect '" + name + "' cannot be identified: " + missing);
     list.push_back(e);
@@ -301,7 +304,7 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
   std::map<std::string, std::vector<bool>> held;
   for (const Effect* e : list) {
     const std::size_t k = e->parameter_names(robot).size();
-    values.values[e->name()] = VectorXd::Zero(Index(k));
+    values.values[e->name()] = e->start_values(robot);
     held[e->name()].assign(k, false);
   }
 
@@ -358,7 +361,7 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
     MatrixXd H;
     VectorXd y;
     stack(b, false, H, y);
-    const double k = joint_gcv_k(joint_design(robot, list, held, b, H), y + H * stepped->away(), H.cols());
+    const double k = joint_gcv_k(joint_design(robot, list, held, b, H, values), y + H * stepped->away(), H.cols());
     stepped->set_penalty(k);
     rep.base = "ridge toward " + std::string(stepped->centre()) + ", k = " + number(k) + " chosen by GCV on base" +
                (list.empty() ? "" : " + effects") + " at the solution (k from 1e-12, OLS, to 1e4)";
@@ -375,7 +378,9 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
     const std::optional<HeldParameter> weakest = least_significant(robot, list, held, values, base);
     if (!weakest || weakest->p_value * double(weakest->free_parameters) < options.alpha) break;
     held[weakest->effect][weakest->index] = true;
-    values.values[weakest->effect](Index(weakest->index)) = 0.0;
+    // Held at its start (0 but for a formula's `start`).
+    values.values[weakest->effect](Index(weakest->index)) =
+        find_effect(robot, weakest->effect)->start_values(robot)(Index(weakest->index));
     rep.held.push_back(*weakest);
     base = fit();
   }
@@ -383,7 +388,7 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
   VectorXd y;
   stack(base, false, H, y);
   rep.rms_cal_um_final = rms_um(y);
-  rep.final_problem.H = joint_design(robot, list, held, base, H);
+  rep.final_problem.H = joint_design(robot, list, held, base, H, values);
   rep.final_problem.y = y;
   for (const detail::NodeData& n : base.nodes) {
     if (n.test) continue;

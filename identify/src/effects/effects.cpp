@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
+#include "kincal/identify/formula_candidate.hpp"
 #include "families/family.hpp"
 #include "kincal/identify/input_error.hpp"
 
@@ -217,6 +219,25 @@ std::string effect_names() {
   return out;
 }
 
+std::vector<const Effect*> effect_candidates(const Robot& robot) {
+  std::vector<const Effect*> out;
+  for (const auto& e : effect_registry()) out.push_back(e.get());
+  for (const auto& f : robot.formula_effects) out.push_back(f.get());
+  return out;
+}
+
+const Effect* find_effect(const Robot& robot, const std::string& name) {
+  for (const Effect* e : effect_candidates(robot))
+    if (e->name() == name) return e;
+  return nullptr;
+}
+
+std::string effect_names(const Robot& robot) {
+  std::string out;
+  for (const Effect* e : effect_candidates(robot)) out += (out.empty() ? "" : ", ") + e->name();
+  return out;
+}
+
 EffectParameters<double> effect_frame(const Robot& robot) {
   EffectParameters<double> e;
   e.screw_lead = robot.screw_lead;
@@ -242,6 +263,10 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
     n.temperature = row.temp;
     n.time = row.time;
     if (row.dir) n.inputs.direction = row.dir->head<6>().cast<double>();
+    for (const std::string& in : robot.formula_inputs) {
+      const auto it = row.inputs.find(in);
+      n.formula_inputs.push_back(it != row.inputs.end() ? it->second : std::numeric_limits<double>::quiet_NaN());
+    }
     nodes[k] = n;
   }
   if (!table.has_dir) {
@@ -268,8 +293,8 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
 }
 
 void EffectValues::set(const Robot& robot, const std::string& effect, const std::string& parameter, double value) {
-  const Effect* e = find_effect(effect);
-  if (e == nullptr) throw InputError("unknown effect '" + effect + "' (known: " + effect_names() + ")");
+  const Effect* e = find_effect(robot, effect);
+  if (e == nullptr) throw InputError("unknown effect '" + effect + "' (known: " + effect_names(robot) + ")");
   const std::vector<std::string> names = e->parameter_names(robot);
   const auto it = std::find(names.begin(), names.end(), parameter);
   if (it == names.end()) {
@@ -280,15 +305,15 @@ void EffectValues::set(const Robot& robot, const std::string& effect, const std:
   }
   if (!std::isfinite(value)) throw InputError("effect " + effect + ":" + parameter + ": value must be finite");
   Eigen::VectorXd& v = values[effect];
-  if (v.size() == 0) v = Eigen::VectorXd::Zero(Eigen::Index(names.size()));
+  if (v.size() == 0) v = e->start_values(robot);
   v(it - names.begin()) = value;
 }
 
 EffectParameters<double> EffectValues::to_core(const Robot& robot) const {
   EffectParameters<double> out = effect_frame(robot);
   for (const auto& [name, v] : values) {
-    const Effect* e = find_effect(name);
-    if (e == nullptr) throw InputError("unknown effect '" + name + "' (known: " + effect_names() + ")");
+    const Effect* e = find_effect(robot, name);
+    if (e == nullptr) throw InputError("unknown effect '" + name + "' (known: " + effect_names(robot) + ")");
     const UserJointError<double> before = out.user_error;
     e->apply(robot, v, out);
     // core has one user slot (EffectParameters::user, user_error).
@@ -296,6 +321,12 @@ EffectParameters<double> EffectValues::to_core(const Robot& robot) const {
       throw InputError("effects: '" + name + "' and another effect both use the controller's one user joint effect "
                        "slot; identify them in separate models or combine them into one effect");
   }
+  // The user slot holds the C++ user effect's numbers or the formulas'.
+  if (out.user_error != nullptr && !robot.formula_effects.empty())
+    for (const auto& f : robot.formula_effects)
+      if (values.count(f->name()))
+        throw InputError("effects: the C++ user effect and the formula effect '" + f->name() +
+                         "' both need the controller's user slot; identify them in separate models");
   return out;
 }
 
@@ -306,6 +337,15 @@ bool EffectValues::needs_temperature() const {
 
 Vec6<double> effect_actual_joints(const EffectParameters<double>& effects, const EffectNode& node) {
   return node.q + effect_joint_error(effects, node.q, node.inputs);
+}
+
+Vec6<double> effect_joint_error(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
+                                const Vec6<double>& q) {
+  return effect_joint_error(effects, q, node.inputs) + formula_joint_error(robot, effects, node, q);
+}
+
+Vec6<double> effect_actual_joints(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node) {
+  return node.q + effect_joint_error(robot, effects, node, node.q);
 }
 
 }  // namespace kincal::identify

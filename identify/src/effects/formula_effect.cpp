@@ -597,7 +597,11 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
   // The variables, by name.
   std::vector<std::string> variables;  // for the "allowed" list
   std::map<std::string, SymbolSource> sources;
-  const FormulaLayout lay{N, static_cast<int>(s.inputs.size()), static_cast<int>(context.family_variables.size())};
+  // The inputs' slots: the robot's shared input list if the context gives
+  // one (every effect of a machine reads one layout, as the controller
+  // fills it), else this entry's own.
+  const std::vector<std::string>& input_layout = context.input_layout.empty() ? s.inputs : context.input_layout;
+  const FormulaLayout lay{N, static_cast<int>(input_layout.size()), static_cast<int>(context.family_variables.size())};
   m.layout = lay;
   std::set<std::string> reserved;  // every built-in variable name, whatever the kind
   for (const char* v : {"q", "dir", "load", "temp", "time", "pi"}) reserved.insert(v);
@@ -646,7 +650,9 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
   };
   for (std::size_t i = 0; i < s.inputs.size(); ++i) {
     check_name("inputs", "the input", s.inputs[i]);
-    sources[s.inputs[i]] = {SymbolSource::Var, lay.input(static_cast<int>(i)), s.inputs[i]};
+    const auto at = std::find(input_layout.begin(), input_layout.end(), s.inputs[i]);
+    if (at == input_layout.end()) m.fail("inputs", "the input " + in_quotes(s.inputs[i]) + " is not in the machine's input list");
+    sources[s.inputs[i]] = {SymbolSource::Var, lay.input(static_cast<int>(at - input_layout.begin())), s.inputs[i]};
     variables.push_back(s.inputs[i]);
   }
   if (!joint_kind && !s.per_joint.empty())
@@ -1077,7 +1083,7 @@ std::vector<FormulaEffect> read_formula_effects(const std::string& text, const s
   const nlohmann::json& list = doc["effects"];
   if (!list.is_array()) r.fail("/effects", "'effects' must be an array of effect objects, not " + std::string(detail::type_name(list)));
 
-  std::vector<FormulaEffect> out;
+  std::vector<FormulaEffectSpec> specs;
   std::map<std::string, std::string> seen;  // name → its path
   for (std::size_t i = 0; i < list.size(); ++i) {
     const std::string path = detail::child_path("/effects", i);
@@ -1144,8 +1150,22 @@ std::vector<FormulaEffect> read_formula_effects(const std::string& text, const s
     if (previous != seen.end())
       r.fail(key("name"), "two effects are named '" + spec.name + "' (the other is " + detail::display(previous->second) + ")");
     seen.emplace(spec.name, path);
-    out.emplace_back(spec, context);
+    specs.push_back(std::move(spec));
   }
+  // One input layout for the machine: every entry's inputs, in order of
+  // first appearance (the NC stream and the measurement columns carry them
+  // once, whichever effects read them).
+  FormulaContext shared = context;
+  if (shared.input_layout.empty())
+    for (const auto& spec : specs)
+      for (const auto& in : spec.inputs)
+        if (std::find(shared.input_layout.begin(), shared.input_layout.end(), in) == shared.input_layout.end())
+          shared.input_layout.push_back(in);
+  if (shared.max_inputs >= 0 && static_cast<int>(shared.input_layout.size()) > shared.max_inputs)
+    r.fail("/effects", "the effects read " + std::to_string(shared.input_layout.size()) +
+                           " named inputs; a machine may have at most " + std::to_string(shared.max_inputs));
+  std::vector<FormulaEffect> out;
+  for (const auto& spec : specs) out.emplace_back(spec, shared);
   return out;
 }
 

@@ -92,7 +92,7 @@ class DescriptionReader {
   // keys (for object()'s list of allowed keys).
   static std::vector<std::string> with_common_optional(std::vector<std::string> keys) {
     for (const char* k : {"screw_lead", "max_correction", "max_geometry_error", "max_angle_error", "max_scale",
-                          "max_thermal", "targets"})
+                          "max_thermal", "targets", "effects", "payload"})
       keys.emplace_back(k);
     return keys;
   }
@@ -107,6 +107,14 @@ class DescriptionReader {
     if (doc.contains("max_scale")) robot.max_scale = cap(doc["max_scale"], "/max_scale");
     if (doc.contains("max_thermal")) robot.max_thermal = cap(doc["max_thermal"], "/max_thermal");
     if (doc.contains("targets")) robot.targets = target_points(doc["targets"], "/targets");
+    if (doc.contains("payload")) {
+      const nlohmann::json& p = object(doc["payload"], "/payload", {}, {"weight", "com"});
+      if (p.contains("weight")) robot.payload_weight = positive(p["weight"], "/payload/weight");
+      if (p.contains("com")) robot.payload_com = vector<3>(p["com"], "/payload/com");
+      robot.has_payload = true;
+    }
+    // `effects` needs the whole text (positions of the formulas' keys):
+    // parse_robot reads it after the family (formula_effect.hpp).
   }
 
   // Every number of a description is a length in mm, an angle in rad or a

@@ -12,10 +12,12 @@
 #include <utility>
 #include <vector>
 
+#include "kincal/identify/formula_candidate.hpp"
 #include "families/description_reader.hpp"
 #include "families/family.hpp"
 #include "io/json_locator.hpp"
 #include "kincal/core/compensation.hpp"
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/core/reference_machines.hpp"
 #include "kincal/identify/input_error.hpp"
 
@@ -81,6 +83,32 @@ namespace {
 
 const std::vector<std::string> kCommonRequired = {"format", "version", "family", "name", "units"};
 
+// The `effects` key: compiled (formula_effect.hpp, every error with the
+// file, line and column), wrapped as candidates whose numbers follow one
+// another in core's user slot, their inputs gathered into one list.
+void read_formula_effects_into(Robot& robot, const json& doc, const std::string& text, const std::string& file) {
+  if (!doc.contains("effects")) return;
+  FormulaContext context;
+  context.joint_count = Robot::joint_count();
+  context.max_inputs = kFormulaInputs;
+  std::vector<FormulaEffect> effects = read_formula_effects(text, file, context);
+  const detail::DescriptionReader r(text, file);
+  int offset = 0;
+  for (FormulaEffect& e : effects) {
+    for (const std::string& in : e.spec().inputs)
+      if (std::find(robot.formula_inputs.begin(), robot.formula_inputs.end(), in) == robot.formula_inputs.end())
+        robot.formula_inputs.push_back(in);
+    const int n = int(e.parameter_names().size());
+    auto shared = std::make_shared<const FormulaEffect>(std::move(e));
+    robot.formula_effects.push_back(std::make_shared<const FormulaCandidate>(shared, offset));
+    offset += n;
+  }
+  if (offset > kUserEffectParameters)
+    r.fail("/effects", "the formula effects have " + std::to_string(offset) + " parameters; the controller's table holds " +
+                           std::to_string(kUserEffectParameters) + " (core's user slot)");
+  robot.effects_json = doc["effects"].dump();
+}
+
 }  // namespace
 
 Robot parse_robot(const std::string& text, const std::string& file) {
@@ -106,6 +134,7 @@ Robot parse_robot(const std::string& text, const std::string& file) {
   if (f == nullptr) r.fail("/family", "unknown family '" + family + "' (known: " + family_names() + ")");
   Robot robot = f->parse(doc, r);
   robot.name = name;
+  read_formula_effects_into(robot, doc, text, file);
   return robot;
 }
 
@@ -174,6 +203,10 @@ std::string robot_to_json(const Robot& robot) {
     for (const Vec3<double>& p : robot.targets) t.push_back({p.x(), p.y(), p.z()});
     j["targets"] = t;
   }
+  if (robot.has_payload)
+    j["payload"] = {{"weight", robot.payload_weight},
+                    {"com", {robot.payload_com.x(), robot.payload_com.y(), robot.payload_com.z()}}};
+  if (!robot.effects_json.empty()) j["effects"] = nlohmann::ordered_json::parse(robot.effects_json);
   std::string out;
   write_pretty(j, 0, out);
   return out + "\n";

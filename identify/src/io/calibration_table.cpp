@@ -1,6 +1,9 @@
 #include "kincal/identify/calibration_table.hpp"
 
+#include "kincal/identify/formula_candidate.hpp"
+
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -205,7 +208,7 @@ bool table_ok(const CalibrationModel& model, const CalibrationTableOptions& opti
   }
   alone.parameters.clear();
   for (const auto& [effect, values] : model.effects.values) {
-    const Effect* e = find_effect(effect);
+    const Effect* e = find_effect(model.nominal, effect);
     if (!culprit.empty() || e == nullptr) break;
     const std::vector<std::string> names = e->parameter_names(model.nominal);
     for (std::size_t i = 0; i < names.size() && culprit.empty() && Eigen::Index(i) < values.size(); ++i) {
@@ -265,9 +268,15 @@ CompensatedStream compensate_rows(const AnyCalibrationTable& table, const Calibr
   // The limits the table was checked against (calibration_table): every cap
   // of the robot description, not only the table's own bounds.
   const MachineLimits<double> limits = machine_limits(model.nominal, options);
-  std::visit(
-      [&](const auto& t) {
-        Compensator<typename std::decay_t<decltype(t)>::MachineType> compensator(t, limits);
+  const Robot& robot = model.nominal;
+  // A formula the model carries reads columns the poses must have.
+  for (const auto& f : robot.formula_effects) {
+    if (!model.effects.values.count(f->name())) continue;
+    const std::string missing = f->missing_inputs(poses);
+    if (!missing.empty())
+      throw InputError(poses.file, 0, 0, "the model's formula effect '" + f->name() + "' cannot be compensated: " + missing);
+  }
+  const auto run = [&](auto& compensator) {
         if (compensator.status() != CompensationStatus::Ok)
           throw InputError(std::string("calibration table: ") + to_string(compensator.status()));
         // A registered user joint effect's code (its numbers are in the table).
@@ -289,10 +298,28 @@ CompensatedStream compensate_rows(const AnyCalibrationTable& table, const Calibr
             dir = r.dir->head<6>().cast<double>();
             point.direction = &dir;
           }
+          if (r.time) point.time = *r.time;
+          double inputs[kFormulaInputs] = {};
+          for (std::size_t i = 0; i < robot.formula_inputs.size(); ++i) {
+            const auto it = r.inputs.find(robot.formula_inputs[i]);
+            inputs[i] = it != r.inputs.end() ? it->second : std::numeric_limits<double>::quiet_NaN();
+          }
+          point.inputs = inputs;
           CompensatedRow row;
           row.status = compensator.compensate(state, point, row.q);
           if (row.status != CompensationStatus::Ok) row.q.setZero();
           out.rows.push_back(row);
+        }
+  };
+  std::visit(
+      [&](const auto& t) {
+        using Machine = typename std::decay_t<decltype(t)>::MachineType;
+        if (robot.formula_effects.empty()) {
+          Compensator<Machine> compensator(t, limits);
+          run(compensator);
+        } else {
+          Compensator<Machine, HostFormulaEffects> compensator(t, limits, HostFormulaEffects(robot));
+          run(compensator);
         }
       },
       table);

@@ -289,7 +289,16 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
   table.has_time = time.present;
   table.has_status = status.present;
 
+  std::vector<Group> inputs;
+  for (const std::string& name : options.input_columns) {
+    inputs.push_back(Group({name}));
+    inputs.back().resolve(doc, "input " + name, false);
+    if (inputs.back().present) table.input_names.push_back(name);
+  }
   std::vector<bool> known(doc.header.fields.size(), false);
+  for (const Group& g : inputs)
+    for (int i : g.index)
+      if (i >= 0) known[static_cast<std::size_t>(i)] = true;
   for (const Group* g : {&id, &pose, &measured, &targets[0], &targets[1], &targets[2], &q, &dir, &layer, &role, &temp,
                          &time, &status})
     for (int i : g->index)
@@ -367,6 +376,9 @@ PoseTable parse_pose_table(std::string_view text, const std::string& file, const
     }
     if (temp.present) row.temp = parse_number(r.fields[static_cast<std::size_t>(temp.index[0])], r.line, file, "temp");
     if (time.present) row.time = parse_number(r.fields[static_cast<std::size_t>(time.index[0])], r.line, file, "time");
+    for (const Group& g : inputs)
+      if (g.present)
+        row.inputs[g.names[0]] = parse_number(r.fields[static_cast<std::size_t>(g.index[0])], r.line, file, g.names[0]);
     table.rows.push_back(std::move(row));
   }
   return table;
@@ -407,6 +419,7 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
   if (t.has_dir)
     for (const auto& c : numbered("dir", n)) header.push_back(c);
   if (t.has_status) header.push_back("status");
+  for (const auto& name : t.input_names) header.push_back(name);
   for (std::size_t i = 0; i < header.size(); ++i) out << (i ? "," : "") << header[i];
   out << "\n";
 
@@ -425,6 +438,10 @@ void write_pose_table(const PoseTable& t, std::ostream& out) {
     if (t.has_dir)
       for (int k = 0; k < n; ++k) f.push_back(r.dir ? ((*r.dir)(k) > 0 ? "1" : "-1") : "");
     if (t.has_status) f.push_back(csv_text(r.status.empty() ? "ok" : r.status));
+    for (const auto& name : t.input_names) {
+      const auto it = r.inputs.find(name);
+      f.push_back(it != r.inputs.end() ? format_number(it->second) : "");
+    }
     for (std::size_t i = 0; i < f.size(); ++i) out << (i ? "," : "") << f[i];
     out << "\n";
   }

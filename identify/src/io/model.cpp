@@ -48,7 +48,7 @@ std::string model_to_json(const CalibrationModel& model) {
   // Physical effects (identify/effects.hpp): {"scale": {"s1": 1e-4, ...}, ...}.
   json effects = json::object();
   for (const auto& [name, values] : model.effects.values) {
-    const Effect* e = find_effect(name);
+    const Effect* e = find_effect(model.nominal, name);
     if (e == nullptr) continue;
     const std::vector<std::string> names = e->parameter_names(model.nominal);
     json v = json::object();

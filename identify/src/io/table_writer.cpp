@@ -1,5 +1,7 @@
 #include "kincal/identify/table_writer.hpp"
 
+#include "kincal/identify/formula_candidate.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -272,6 +274,15 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
 }  // namespace
 
 std::string calibration_table_header(const CalibrationModel& model, const std::string& model_name) {
+  // Formula effects reach the firmware as generated C++ (issue #32): not
+  // written yet, so a model with one is refused rather than given a table
+  // whose numbers the firmware has no code for.
+  for (const auto& [name, values] : model.effects.values)
+    for (const auto& f : model.nominal.formula_effects)
+      if (f->name() == name)
+        throw InputError(model_name, 0, 0,
+                         "the model's formula effect '" + name +
+                             "' is not written into the firmware header yet (kincal compensate applies it on the host)");
   const AnyCalibrationTable t = calibration_table(model);
   return std::visit([&](const auto& table) { return header_for(model, table, model_name); }, t);
 }

@@ -496,8 +496,8 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   std::vector<const Effect*> effects;
   bool backlash = false;
   for (const std::string& name : o.effects) {
-    const Effect* e = find_effect(name);
-    if (e == nullptr) throw InputError("", 0, 0, "unknown effect '" + name + "' (known: " + effect_names() + ")");
+    const Effect* e = find_effect(robot, name);
+    if (e == nullptr) throw InputError("", 0, 0, "unknown effect '" + name + "' (known: " + effect_names(robot) + ")");
     if (name == "thermal") {
       plan.notes.push_back(
           "thermal is not in the criterion: its parameter is seen only through the structure's temperature "

@@ -27,6 +27,7 @@ namespace {
 
 // The machine's physical effects (null: none) with the row's node.
 struct RowEffects {
+  const Robot* robot = nullptr;  // its formula effects
   const EffectParameters<double>* parameters = nullptr;
   const EffectNode* node = nullptr;
 };
@@ -36,7 +37,9 @@ struct RowEffects {
 ReachedPose run_row(const ActualMachine& machine, const PoseRow& row, const RowEffects& effects) {
   std::function<Vec6<double>(const Vec6<double>&)> joint_error;
   if (effects.node != nullptr)
-    joint_error = [&](const Vec6<double>& q) { return effect_joint_error(*effects.parameters, q, effects.node->inputs); };
+    joint_error = [&](const Vec6<double>& q) {
+      return effect_joint_error(*effects.robot, *effects.parameters, *effects.node, q);
+    };
   ReachedPose out = machine.reach(row, joint_error);
   if (out.status == Status::Ok && effects.node != nullptr && row.temp)
     out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
@@ -83,6 +86,10 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   if (with_effects && options.effects.needs_temperature() && !poses.has_temp)
     throw InputError(poses.file, 1, 0, "the thermal effect needs a temp column (structure temperature, C)");
   const EffectParameters<double> effect_parameters = options.effects.to_core(nominal);
+  for (const auto& [name, values] : options.effects.values) {
+    const std::string missing = find_effect(nominal, name)->missing_inputs(poses);
+    if (!missing.empty()) throw InputError(poses.file, 1, 0, "effect '" + name + "' cannot be simulated: " + missing);
+  }
   const std::vector<std::optional<EffectNode>> effect_node =
       with_effects ? effect_nodes(nominal, poses) : std::vector<std::optional<EffectNode>>{};
   for (std::size_t index = 0; index < out.rows.size(); ++index) {
@@ -91,7 +98,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
     row.targets.reset();
     row.status = "ok";
     RowEffects effects;
-    if (with_effects && effect_node[index]) effects = {&effect_parameters, &*effect_node[index]};
+    if (with_effects && effect_node[index]) effects = {&nominal, &effect_parameters, &*effect_node[index]};
     const ReachedPose r = run_row(*machine, row, effects);
     if (r.status != Status::Ok) {
       row.status = to_string(r.status);

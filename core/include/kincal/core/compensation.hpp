@@ -45,6 +45,7 @@
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/compensation_status.hpp"
 #include "kincal/core/effects.hpp"
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/hybrid_exact.hpp"
 #include "kincal/core/machine_limits.hpp"
@@ -83,6 +84,13 @@ template <class Scalar> struct NcPoint {
   // Explicit approach directions (±1) for the backlash effect; null: derived
   // from the command sequence. Must stay valid during the call only.
   const Vec6<Scalar>* direction = nullptr;
+  // For the machine's formula effects (formula_effects.hpp): the time
+  // stamp, s (0 if not given), and the named inputs, kFormulaInputs values in
+  // the machine's input order (the robot description's); null: none, which
+  // a machine whose formulas read inputs refuses (InvalidInput). Must stay
+  // valid during the call only.
+  Scalar time = Scalar(0);
+  const Scalar* inputs = nullptr;
 };
 
 // What the controller remembers between points (the workspace).
@@ -214,7 +222,9 @@ struct TrustTableBounds {
 };
 inline constexpr TrustTableBounds trust_table_bounds{};
 
-template <class Machine> class Compensator {
+// `Formulas`: the machine's formula effects (formula_effects.hpp; none by
+// default, and then no code for them).
+template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
  public:
   using Scalar = typename Machine::Scalar;
   using Table = CalibrationTable<Machine>;
@@ -235,11 +245,12 @@ template <class Machine> class Compensator {
   // `trust_table_bounds` instead, the table's own bounds serve (host tools
   // that built the table from a robot description they trust; see
   // TrustTableBounds).
-  Compensator(const Table&& table, TrustTableBounds) = delete;
-  Compensator(const Table&& table, const MachineLimits<Scalar>& limits) = delete;
-  Compensator(const Table& table, TrustTableBounds) : Compensator(table, limits_from_bounds(table.bounds)) {}
-  Compensator(const Table& table, const MachineLimits<Scalar>& limits)
-      : table_(&table), status_(validate_table(table, limits)) {
+  Compensator(const Table&& table, TrustTableBounds, const Formulas& = Formulas()) = delete;
+  Compensator(const Table&& table, const MachineLimits<Scalar>& limits, const Formulas& = Formulas()) = delete;
+  Compensator(const Table& table, TrustTableBounds, const Formulas& formulas = Formulas())
+      : Compensator(table, limits_from_bounds(table.bounds), formulas) {}
+  Compensator(const Table& table, const MachineLimits<Scalar>& limits, const Formulas& formulas = Formulas())
+      : table_(&table), status_(validate_table(table, limits)), formulas_(formulas) {
     if (status_ != CompensationStatus::Ok) return;
     if (!model_.load(table.machine)) {
       status_ = CompensationStatus::TableValues;
@@ -249,7 +260,7 @@ template <class Machine> class Compensator {
 #if !KINCAL_CORE_USER_EFFECT
     // User numbers without the code to use them: refuse rather than drop
     // part of the model (effects.hpp, KINCAL_CORE_USER_EFFECT).
-    if (!effects_.user.isZero()) {
+    if (!Formulas::present && !effects_.user.isZero()) {  // (the user slot holds the formulas' numbers)
       status_ = CompensationStatus::TableValues;
       return;
     }
@@ -259,7 +270,7 @@ template <class Machine> class Compensator {
       min_joint_(i) = table.bounds.min_joint[i];
       max_joint_(i) = table.bounds.max_joint[i];
     }
-    joint_effects_ = effects_.joint_effects_present();
+    joint_effects_ = effects_.joint_effects_present() || Formulas::present;
     compliance_ = !effects_.compliance.isZero();
     thermal_ = effects_.thermal != Scalar(0);
   }
@@ -269,7 +280,7 @@ template <class Machine> class Compensator {
   // the code, once at start-up before the first point. Null removes it.
   void set_user_effect(UserJointError<Scalar> function) {
     effects_.user_error = function;
-    joint_effects_ = effects_.joint_effects_present();
+    joint_effects_ = effects_.joint_effects_present() || Formulas::present;
   }
 
   CompensationStatus status() const { return status_; }
@@ -359,7 +370,20 @@ template <class Machine> class Compensator {
     EffectInputs<Scalar> inputs;
     inputs.load.setZero();
     Vec6<Scalar> nominal_q, ideal;
-    const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load, warm);
+    FormulaVariables<Scalar> vars;
+    if constexpr (Formulas::present) {
+      if (!is_finite(point.time)) return CS::InvalidInput;
+      vars.v[FormulaSlot::temp] = temperature;
+      vars.v[FormulaSlot::time] = point.time;
+      vars.set_pose(point.pose);
+      const int n = formulas_.input_count();
+      if (n > 0 && point.inputs == nullptr) return CS::InvalidInput;
+      for (int i = 0; i < n; ++i) {
+        if (!is_finite(point.inputs[i])) return CS::InvalidInput;
+        vars.v[FormulaSlot::input + i] = point.inputs[i];
+      }
+    }
+    const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load, warm, vars);
     if (st != CS::Ok) return st;
 
     // Approach directions (backlash): explicit, or the sign of the change of
@@ -382,7 +406,16 @@ template <class Machine> class Compensator {
     inputs.direction = dir;
 
     Vec6<Scalar> q = ideal;
-    if (joint_effects_) {
+    if constexpr (Formulas::present) {
+      // The formulas' Δq at each iterate of the fixed point, with the
+      // built-in effects' (their numbers: the table's user slot).
+      vars.set_directions(dir);
+      const Status es = effect_correct_joints(effects_, ideal, inputs, q, [&](const Vec6<Scalar>& at, Vec6<Scalar>& dq) {
+        vars.set_joints(at);
+        formulas_.add_joint_error(effects_.user.data(), vars.v, dq.data());
+      });
+      if (es != Status::Ok) return to_compensation_status(es);
+    } else if (joint_effects_) {
       const Status es = effect_correct_joints(effects_, ideal, inputs, q);
       if (es != Status::Ok) return to_compensation_status(es);
     }
@@ -399,11 +432,35 @@ template <class Machine> class Compensator {
   // work before the IK is a separate, non-inlined call so that its frames,
   // wrenches and Jacobians are off the stack when the IK runs: the
   // controller's worst-case stack is the deeper of the two, not their sum.
+  // `vars`: the formulas' variables (formula effects only): the static
+  // loads under the payload are set here; a pose-kind formula's twist,
+  // evaluated at the nominal joints, is taken off the pose before the
+  // thermal pre-scaling (the machine's tool lands that twist away from where
+  // its kinematics put it; formula_pose_precorrect).
   CompensationStatus geometry(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
-                              Vec6<Scalar>& ideal, Vec6<Scalar>& load, CompensatorWarmStart<Scalar>* warm) const {
+                              Vec6<Scalar>& ideal, Vec6<Scalar>& load, CompensatorWarmStart<Scalar>* warm,
+                              [[maybe_unused]] FormulaVariables<Scalar>& vars) const {
     Pose<Scalar> target;
-    const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
-    if (st != CompensationStatus::Ok) return st;
+    if constexpr (Formulas::present) {
+      Vec6<Scalar> payload_load = Vec6<Scalar>::Zero();
+      const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target, &payload_load);
+      if (st != CompensationStatus::Ok) return st;
+      vars.set_loads(payload_load);
+      if (formulas_.has_pose()) {
+        vars.set_joints(nominal_q);
+        target = formula_pose_precorrect(pose, [&](const Pose<Scalar>& at, Vec6<Scalar>& twist) {
+          vars.set_pose(at);
+          twist.setZero();
+          formulas_.add_pose_twist(effects_.user.data(), vars.v, twist.data());
+        });
+        vars.set_pose(pose);
+        if (!target.finite()) return CompensationStatus::InvalidInput;
+        if (thermal_) target = thermal_precorrect(effects_, target, temperature);
+      }
+    } else {
+      const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
+      if (st != CompensationStatus::Ok) return st;
+    }
     return solve(target, ideal, warm);
   }
 
@@ -439,9 +496,15 @@ template <class Machine> class Compensator {
 
   // At the nominal configuration of `pose`: q_nom, the singularity test, the
   // static load; then the pose handed to the IK (thermal pre-scaling).
+  // `payload_load` (formula effects): the static joint loads under the
+  // formulas' payload (its weight at its centre of mass; the hybrid's at the
+  // tool point). With it, a pose-kind formula's twist comes before the
+  // thermal pre-scaling, which geometry() then applies.
   KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
-                                             Vec6<Scalar>& load, Pose<Scalar>& target) const {
+                                             Vec6<Scalar>& load, Pose<Scalar>& target,
+                                             Vec6<Scalar>* payload_load = nullptr) const {
     using CS = CompensationStatus;
+    const bool thermal_here = thermal_ && !(payload_load != nullptr && formulas_.has_pose());
     if constexpr (family == MachineFamily::Stewart6Ups) {
       // The nominal IK with its Jacobian: the singularity test of the NC point,
       // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
@@ -449,7 +512,15 @@ template <class Machine> class Compensator {
       const Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
-      target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      if constexpr (Formulas::present) {
+        if (payload_load != nullptr) {
+          const Vec3<Scalar> F = formulas_.payload_weight() * effects_.load_direction;
+          Vec6<Scalar> wrench;
+          wrench << F, Vec3<Scalar>(pose.R * formulas_.payload_com()).cross(F);
+          if (!static_load_of_wrench(J, wrench, *payload_load)) return CS::Singular;
+        }
+      }
+      target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
       return CS::Ok;
     } else {
       HybridFrames<Scalar> f;
@@ -465,13 +536,20 @@ template <class Machine> class Compensator {
       s = hybrid_wrenches(model_.nominal, f, w);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
-      target = thermal_ ? thermal_precorrect(effects_, pose, temperature) : pose;
+      if constexpr (Formulas::present) {
+        // (the hybrid's payload acts at the tool point: identify refuses a
+        // centre of mass elsewhere)
+        if (payload_load != nullptr)
+          *payload_load = formulas_.payload_weight() * hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
+      }
+      target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
       return CS::Ok;
     }
   }
 
   const Table* table_;
   CompensationStatus status_;
+  Formulas formulas_;
   compensation_detail::Model<Machine> model_;
   EffectParameters<Scalar> effects_;
   Vec6<Scalar> max_correction_ = Vec6<Scalar>::Zero();

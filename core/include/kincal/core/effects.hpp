@@ -150,14 +150,24 @@ Vec6<Scalar> static_load_forward(const Mat6<Scalar>& forward_jacobian, const Vec
 
 // The same from the IK Jacobian (q̇ = J·twist, as stewart_ik returns it):
 // Jᵀ·τ = (F, 0). false if J is singular.
+
+
+// The static joint load τ of a wrench (F, M) on the pose's reference point
+// (a payload's weight at its centre of mass: M = r × F) from the IK Jacobian
+// (q̇ = J·twist, as stewart_ik returns it): Jᵀ·τ = (F, M). false if J is
+// singular. static_load_inverse: a weight at the reference point (M = 0).
 template <class Scalar>
-bool static_load_inverse(const Mat6<Scalar>& ik_jacobian, const Vec3<Scalar>& weight, Vec6<Scalar>& load) {
+bool static_load_of_wrench(const Mat6<Scalar>& ik_jacobian, const Vec6<Scalar>& wrench, Vec6<Scalar>& load) {
   SmallLu<Scalar, 6> lu;
   if (!factor_regular(lu, Mat6<Scalar>(ik_jacobian.transpose()))) return false;
-  Vec6<Scalar> wrench;
-  wrench << weight, Vec3<Scalar>::Zero();
   load = lu.solve(wrench);
   return all_finite(load);
+}
+template <class Scalar>
+bool static_load_inverse(const Mat6<Scalar>& ik_jacobian, const Vec3<Scalar>& weight, Vec6<Scalar>& load) {
+  Vec6<Scalar> wrench;
+  wrench << weight, Vec3<Scalar>::Zero();
+  return static_load_of_wrench(ik_jacobian, wrench, load);
 }
 
 // ε = c·(T − T0).
@@ -187,15 +197,26 @@ constexpr int kEffectIterations = 4;
 // Joint commands q with q + Δq(q) = ideal (fixed point, see the header
 // comment). Writes `commands` only on Ok; InvalidInput for non-finite input
 // or parameters.
-template <class Scalar>
+// `extra(q, dq)`, if given, adds the Δq of effects outside this table at
+// command q (a machine's formula effects, formula_effects.hpp).
+template <class Scalar, class Extra>
 Status effect_correct_joints(const EffectParameters<Scalar>& e, const Vec6<Scalar>& ideal,
-                             const EffectInputs<Scalar>& in, Vec6<Scalar>& commands) {
+                             const EffectInputs<Scalar>& in, Vec6<Scalar>& commands, Extra extra) {
   if (!all_finite(ideal) || !all_finite(in.direction) || !all_finite(in.load)) return Status::InvalidInput;
   Vec6<Scalar> q = ideal;
-  for (int it = 0; it < kEffectIterations; ++it) q = ideal - effect_joint_error(e, q, in);
+  for (int it = 0; it < kEffectIterations; ++it) {
+    Vec6<Scalar> dq = effect_joint_error(e, q, in);
+    extra(q, dq);
+    q = ideal - dq;
+  }
   if (!all_finite(q)) return Status::InvalidInput;
   commands = q;
   return Status::Ok;
+}
+template <class Scalar>
+Status effect_correct_joints(const EffectParameters<Scalar>& e, const Vec6<Scalar>& ideal,
+                             const EffectInputs<Scalar>& in, Vec6<Scalar>& commands) {
+  return effect_correct_joints(e, ideal, in, commands, [](const Vec6<Scalar>&, Vec6<Scalar>&) {});
 }
 
 }  // namespace kincal

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <functional>
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -65,6 +66,9 @@ struct PoseRow {
   std::optional<double> temp, time;
   std::optional<Eigen::VectorXi> dir;             // dir1..dirN, each −1 or +1
   std::string status;  // "" when the file has no status column; "ok" or a failure
+  // Named numeric inputs of formula effects (PoseTableOptions::input_columns
+  // the file has), by column name.
+  std::map<std::string, double> inputs;
 };
 
 struct PoseTable {
@@ -75,6 +79,7 @@ struct PoseTable {
   bool has_layer = false, has_role = false, has_measured = false, has_targets = false, has_q = false,
        has_temp = false, has_time = false, has_dir = false, has_status = false;
   std::vector<std::string> ignored_columns;  // unknown columns, in file order
+  std::vector<std::string> input_names;      // the input columns present (PoseTableOptions::input_columns order)
   // Laser-tracker targets per row: t1 .. t<target_count> (0–3; has_targets
   // when > 0). The hybrid's gauge has all three.
   int target_count = 0;
@@ -90,6 +95,9 @@ struct PoseTableOptions {
   int joint_count = 6;
   // Receives one line per warning, already formatted as "FILE:LINE: warning: ...".
   std::function<void(const std::string&)> warn;
+  // Columns read as numbers into PoseRow::inputs when present: the robot's
+  // formula inputs (Robot::formula_inputs), which are then not "unknown".
+  std::vector<std::string> input_columns;
 };
 
 PoseTable parse_pose_table(std::string_view text, const std::string& file, const PoseTableOptions& options = {});

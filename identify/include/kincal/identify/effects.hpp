@@ -31,6 +31,9 @@ struct EffectNode {
   std::optional<double> temperature, time;               // °C, s
   Mat6<double> joint_twist = Mat6<double>::Zero();       // tool twist per unit error of each joint
   Pose<double> pose;                                     // commanded tool pose (pose frame)
+  // The robot's formula inputs (Robot::formula_inputs, that order) from the
+  // row's columns; NaN where the data has none.
+  std::vector<double> formula_inputs;
 };
 
 class Effect {
@@ -52,6 +55,13 @@ class Effect {
   // effect) rather than on the measured pose (thermal). The hybrid's
   // structural twist moves with the joints, not with the measurement.
   virtual bool acts_on_joints() const { return true; }
+  // Where a fit starts (parameter_names order): zero for the built-in
+  // effects, whose columns do not depend on the values; a formula effect's
+  // `start` (its columns are its derivatives at the current values, which a
+  // fit hands in through twist_columns' `frame`).
+  virtual Eigen::VectorXd start_values(const Robot& robot) const {
+    return Eigen::VectorXd::Zero(Eigen::Index(parameter_names(robot).size()));
+  }
   // Tool twist per unit parameter at one node: 6 × parameter_names().size().
   virtual void twist_columns(const Robot& robot, const EffectParameters<double>& frame, const EffectNode& node,
                              Eigen::Ref<Eigen::MatrixXd> columns) const = 0;
@@ -139,6 +149,11 @@ void register_effect(std::shared_ptr<const Effect> effect);
 const Effect* find_effect(const std::string& name);
 // Known names, comma separated (for error messages).
 std::string effect_names();
+// The candidates of one robot: the registry's, then the robot description's
+// formula effects (`effects` key); lookups by name among them.
+std::vector<const Effect*> effect_candidates(const Robot& robot);
+const Effect* find_effect(const Robot& robot, const std::string& name);
+std::string effect_names(const Robot& robot);
 
 // Machine data of the corrections (core EffectParameters with all effect
 // values zero): screw lead and screw-driven joints, the weight direction and
@@ -170,6 +185,11 @@ struct EffectValues {
 // joint-space effects change q (the caller re-runs its FK with
 // q + effect_joint_error), thermal scales about the base origin. This returns
 // the joints to drive the FK with.
+// With `robot`, its formula effects' Δq too (their numbers in effects.user).
 Vec6<double> effect_actual_joints(const EffectParameters<double>& effects, const EffectNode& node);
+Vec6<double> effect_actual_joints(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node);
+// Δq of every joint-space effect (core's and the robot's formulas) at joints q.
+Vec6<double> effect_joint_error(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
+                                const Vec6<double>& q);
 
 }  // namespace kincal::identify

@@ -43,6 +43,14 @@ struct FormulaContext {
   // Effect names a formula effect may not take (the built-in candidates;
   // the registry may pass its own list).
   std::vector<std::string> builtin_effects = {"scale", "backlash", "compliance", "thermal", "cyclic"};
+  // The machine's named inputs in layout order (FormulaLayout::input): one
+  // list for every effect of a machine, so one variable array serves them
+  // all (the controller's). Empty: the entry's own `inputs`.
+  // read_formula_effects fills it with every entry's inputs.
+  std::vector<std::string> input_layout;
+  // The most named inputs a machine may have (core's kFormulaInputs for a
+  // robot description); negative: no limit.
+  int max_inputs = -1;
 };
 
 // Where a key of the description is, for InputError (0 = not known).

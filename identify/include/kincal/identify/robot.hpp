@@ -4,6 +4,7 @@
 // (name, gauge size, screw lead).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>
@@ -17,6 +18,8 @@
 #include "kincal/core/stewart.hpp"
 
 namespace kincal::identify {
+
+class FormulaCandidate;  // effects/formula_candidate.hpp
 
 inline constexpr const char* kStewartFamily = "stewart-6ups";
 inline constexpr const char* kHybridFamily = "hybrid-3ups-up-3r";
@@ -79,6 +82,23 @@ struct Robot {
   // core/stewart.hpp). Given, even as zeros, the identification also fits
   // the six (dsq1..dsq6, after seed 001's 42); absent, they are not modelled.
   bool models_leg_offsets = false;
+  // The optional key `effects` (GUIDE "Effects written as formulas"): the
+  // description's formula effects, compiled, in the order written; their
+  // numbers follow one another in core's user slot. `effects_json` is the
+  // key as written (robot_to_json writes it back), `formula_inputs` every
+  // effect's named measurement inputs in order of first appearance (the
+  // columns the data and the NC stream carry for them).
+  std::vector<std::shared_ptr<const FormulaCandidate>> formula_effects;
+  std::string effects_json;
+  std::vector<std::string> formula_inputs;
+  // The optional key `payload` ({"weight": W, "com": [x, y, z]}): the load a
+  // formula's `load` is the static joint load of — a weight W along the
+  // weight direction at the centre of mass `com` (mm, in the frame of the
+  // body the pose is of: the platform, the hybrid's tool). Default a unit
+  // weight at the pose's origin (the `compliance` effect's load).
+  double payload_weight = 1.0;
+  Vec3<double> payload_com = Vec3<double>::Zero();
+  bool has_payload = false;
 
   bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
   bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }
