@@ -114,3 +114,41 @@ TEST(IndependentSimulatorCsv, StewartTargetsInInstrumentFrameReadBack) {
   EXPECT_EQ(t.target_count, 2);
   expect_same_rows(d, t);
 }
+
+TEST(IndependentSimulatorCsv, StewartEffectDatasetTempAndRoleReadBack) {
+  // The 6-UPS effect dataset's `role` and `temp` columns (issue #32's formula
+  // effects read `temp`) come back through identify's parser, bit for bit.
+  ind::StewartEffects fx;
+  fx.thermal = {1.2e-5, 2.3e-5, 0, 0, 0, 0};
+  fx.ramp_gain[2] = fx.ramp_gain[5] = 1e-4;
+  fx.ramp_knee[2] = fx.ramp_knee[5] = 240;
+  fx.clearance = {0.01, 0.01, 0.01, 0.01, 0.01, 0.01};
+  fx.payload_com = V3(100, 0, 0);
+  std::vector<V6> poses;
+  std::vector<double> temps;
+  std::vector<std::string> roles;
+  for (int k = 0; k < 6; ++k) {
+    poses.push_back((V6() << -25 + 10 * k, 15 - 6 * k, 180 + 7 * k, 0.02 * k - 0.05, 0.03, -0.01 * k).finished());
+    temps.push_back(15.0 + 3.7 * k);
+    roles.push_back(k == 4 ? "test" : "cal");
+  }
+  ind::MeasurementSpec spec;
+  spec.sigma_mm = 0.002;
+  spec.sigma_rad = 5e-6;
+  const ind::Dataset d =
+      ind::make_stewart_effect_dataset(ind::random_stewart_errors(0.1, 1e-3, 3), fx, poses, spec, temps, roles);
+  ASSERT_TRUE(d.skipped.empty());
+  std::vector<std::string> warnings;
+  const auto t = parse(d, warnings);
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_TRUE(t.has_temp);
+  EXPECT_TRUE(t.has_role);
+  EXPECT_FALSE(t.has_dir);
+  EXPECT_TRUE(t.ignored_columns.empty());
+  expect_same_rows(d, t);
+  for (std::size_t i = 0; i < d.rows.size(); ++i) {
+    ASSERT_TRUE(t.rows[i].temp.has_value());
+    EXPECT_EQ(*t.rows[i].temp, d.rows[i].temp);
+    EXPECT_EQ(t.rows[i].role == kincal::identify::Role::Test, d.rows[i].role == "test");
+  }
+}

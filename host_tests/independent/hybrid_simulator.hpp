@@ -152,6 +152,16 @@ inline HybridErrors random_hybrid_errors(double length, double angle, std::uint6
 //              leg, + slope·max(0, q − knee) (a kink no candidate has)
 //   backlash   lost motion b_j: the joint stops b_j/2 short of the command in
 //              the direction it approached from: − (b_j/2)·dir_j
+//   leg_thermal  OUTSIDE the built-in library (issue #32: a formula effect):
+//              the three UPS legs alone expand, each with its own
+//              coefficient (legs of another material than the frame): the
+//              leg value the command sets, x_i = q_i + encoder_i, becomes
+//              x_i·(1 + α_i·(T − 20 °C)), i.e. + α_i·(T − 20)·(q_i + encoder_i)
+//              after backlash and before compliance (the other effects'
+//              micrometres are not scaled). A user writes `a * q * (temp - 20)`
+//              for joints [1, 2, 3]; that scales q, not q + encoder: a
+//              difference of α·encoder·ΔT (~1e-6 µm). Independent of
+//              `thermal` (both may be on).
 //   compliance axial deflection of each UPS leg (and torsion of each wrist
 //              joint) under a unit weight at the tool point along −z of the
 //              base frame {R0}: + k_j·τ_j, τ_j = F·∂p/∂q_j, the static joint
@@ -176,10 +186,13 @@ struct HybridEffects {
   double screw_lead = 5.0;                             // mm
   int ramp_joint = -1;                                 // outside the library: joint 0..5, −1 = off
   double ramp_knee = 0, ramp_slope = 0;                // mm (rad), 1
+  std::array<double, 3> leg_thermal{0, 0, 0};          // α_i, 1/°C, UPS legs (outside the library)
   bool any() const {
     for (int j = 0; j < 6; ++j)
       if (scale[std::size_t(j)] != 0 || backlash[std::size_t(j)] != 0 || compliance[std::size_t(j)] != 0) return true;
     for (double a : cyclic_amplitude)
+      if (a != 0) return true;
+    for (double a : leg_thermal)
       if (a != 0) return true;
     return thermal != 0 || (ramp_joint >= 0 && ramp_slope != 0);
   }
@@ -270,6 +283,8 @@ class HybridSimulator {
       if (j < 3) v(j) += fx.cyclic_amplitude[std::size_t(j)] * std::sin(2.0 * kPi * q(j) / fx.screw_lead + fx.cyclic_phase[std::size_t(j)]);
       if (j == fx.ramp_joint) v(j) += fx.ramp_slope * std::max(0.0, q(j) - fx.ramp_knee);
       v(j) -= 0.5 * fx.backlash[std::size_t(j)] * (in.dir(j) < 0 ? -1.0 : 1.0);
+      if (j < 3 && fx.leg_thermal[std::size_t(j)] != 0)
+        v(j) += fx.leg_thermal[std::size_t(j)] * (in.temp - 20.0) * (q(j) + errors_.ups_encoder[std::size_t(j)]);
     }
     bool compliant = false;
     for (double k : fx.compliance) compliant = compliant || k != 0;

@@ -23,6 +23,40 @@
 // platform / tool frame in the base frame, R = Rz(rz)·Ry(ry)·Rx(rx); the
 // physical leg value is the command plus the encoder offset (core's
 // length_offset sign; nominal 0), x = q + encoder.
+//
+// Hidden physical effects (StewartEffects, issue #32; all zero = off, the
+// default, and then everything is bit for bit the effect-free machine). None
+// of them is one of kincal's built-in effects (core/effects.hpp: its
+// `thermal` is ONE coefficient scaling the whole structure, its `compliance`
+// a deflection LINEAR in the load, its `scale` linear in q, its `backlash`
+// following the approach direction); a user has to write them as formulas in
+// the robot description ("Effects written as formulas" in the guide):
+//  - leg thermal: leg i alone expands, its physical value (q_i + encoder_i)
+//    × (1 + α_i·(T − 20 °C)), one α_i per leg (e.g. legs of two materials);
+//    formula `a * q * (temp - 20)` over those joints. The simulator scales
+//    q + encoder, the formula q: they differ by α·encoder·ΔT (~1e-6 µm).
+//  - ramp: a quadratic lead error in the upper stroke of each leg,
+//    + g_i·max(0, q_i − knee_i)², q_i the COMMAND; formula
+//    `g * max(0, q - q0)^2` (a shared knee q0 guessed by the user; here each
+//    leg may have its own knee).
+//  - clearance: play in a leg's joints taken up by the leg's static load,
+//    + c_i·sign(τ_i) (c_i: half the total play, the shift from the middle of
+//    it). τ_i is leg i's axial load under a payload of weight W along −z of
+//    the base frame at a centre of mass given in the PLATFORM frame, by
+//    virtual work τ_i = F·∂p_com/∂x_i with ∂p_com/∂x_i by central differences
+//    of THIS machine's FK (actual, erroneous geometry) at the leg values the
+//    other effects give (τ_i > 0: the weight pulls the leg longer, tension).
+//    An off-centre or high centre of mass puts some legs in tension at some
+//    poses, so the sign changes across the workspace. kincal's `load` (the
+//    formula variable) is the same virtual-work load but from its NOMINAL
+//    model's Jacobian at the commanded pose: the two differ by about the
+//    geometry errors over the machine's size (~1e-3 relative), so the sign
+//    agrees except for poses that close to a zero crossing. Formula
+//    `c * sign(load)` with the robot description's `payload` set to the same
+//    weight and centre of mass.
+// They change the physical leg value the mechanism reaches for command q:
+// x_i = q_i + encoder_i + Δ_i, Δ_i = α_i·ΔT·(q_i + encoder_i)
+// + g_i·max(0, q_i − knee_i)² + c_i·sign(τ_i) (effective_joints: q + Δ).
 #pragma once
 
 #include "independent_common.hpp"
@@ -76,6 +110,41 @@ inline StewartErrors random_stewart_errors(double length, double angle, std::uin
   return e;
 }
 
+// ------------------------------------------------------------------ physical effects
+
+// Hidden physical effects (header comment). All zero = off (the default).
+// Legs i = 0..5 are the commands q1..q6.
+struct StewartEffects {
+  std::array<double, 6> thermal{0, 0, 0, 0, 0, 0};    // α_i, 1/°C: leg i's value × (1 + α_i·(T − 20 °C))
+  std::array<double, 6> ramp_gain{0, 0, 0, 0, 0, 0};  // g_i, 1/mm: + g_i·max(0, q_i − knee_i)² (mm)
+  std::array<double, 6> ramp_knee{0, 0, 0, 0, 0, 0};  // knee_i, mm (command)
+  std::array<double, 6> clearance{0, 0, 0, 0, 0, 0};  // c_i, mm: + c_i·sign(τ_i)
+  double payload_weight = 1;                          // W (any force unit; only sign(τ) is used), along −z of the base
+  V3 payload_com = V3::Zero();                        // mm: centre of mass, platform frame
+  bool any() const { return any_thermal() || any_ramp() || any_clearance(); }
+  bool any_thermal() const {
+    for (double a : thermal)
+      if (a != 0) return true;
+    return false;
+  }
+  bool any_ramp() const {
+    for (double g : ramp_gain)
+      if (g != 0) return true;
+    return false;
+  }
+  bool any_clearance() const {
+    for (double c : clearance)
+      if (c != 0) return true;
+    return false;
+  }
+};
+
+// What the effects need besides the commands: the structure temperature, °C.
+// (No approach directions: no effect here follows them.)
+struct StewartInputs {
+  double temp = 20;
+};
+
 struct StewartFkResult {
   bool ok = false;
   Pose<double> pose;      // tool frame in the base frame (= platform when the tool error is zero)
@@ -88,7 +157,8 @@ struct StewartFkResult {
 
 class StewartSimulator {
  public:
-  explicit StewartSimulator(const StewartErrors& e = StewartErrors{}) : errors_(e) {
+  explicit StewartSimulator(const StewartErrors& e = StewartErrors{}, const StewartEffects& fx = StewartEffects{})
+      : errors_(e), effects_(fx) {
     // Seed 001 Table 2 (mm), as in make_stewart_seed001().
     const double B[6][2] = {{120, -140},        {120, 140},          {61.243557, 173.92305},
                             {-181.24356, 33.92305}, {-181.24356, -33.92305}, {61.243557, -173.92305}};
@@ -107,6 +177,7 @@ class StewartSimulator {
   }
 
   const StewartErrors& errors() const { return errors_; }
+  const StewartEffects& effects() const { return effects_; }
   const UpsLeg& leg(int i) const { return legs_[std::size_t(i)]; }
   V3 platform_point(int i) const { return platform_point_[std::size_t(i)]; }
 
@@ -154,6 +225,68 @@ class StewartSimulator {
     return out;
   }
 
+  // Static axial load of every leg under the payload (StewartEffects:
+  // weight W along −z of the base frame at payload_com, platform frame) with
+  // the legs at the command-equivalent values v (physical x = v + encoder):
+  // τ_i = F·∂p_com/∂v_i by virtual work, ∂p_com/∂v_i by central differences
+  // (h = 1e-3 mm) of this machine's FK, each started from the FK at v.
+  // τ_i > 0: the weight pulls leg i longer (tension). NaN if an FK fails.
+  V6 leg_loads(const V6& v) const {
+    const StewartFkResult r0 = fk(v);
+    if (!r0.ok) return V6::Constant(std::nan(""));
+    const V3 F(0, 0, -effects_.payload_weight);
+    const double h = 1e-3;
+    V6 tau;
+    for (int j = 0; j < 6; ++j) {
+      V6 a = v, b = v;
+      a(j) += h;
+      b(j) -= h;
+      const StewartFkResult ra = fk(a, &r0.platform), rb = fk(b, &r0.platform);
+      if (!ra.ok || !rb.ok) return V6::Constant(std::nan(""));
+      const V3 dp = (ra.platform.transform(effects_.payload_com) - rb.platform.transform(effects_.payload_com)) / (2 * h);
+      tau(j) = F.dot(dp);
+    }
+    return tau;
+  }
+
+  // The command-equivalent leg values the mechanism has for commands q under
+  // the effects: q + Δ (header comment), so the physical leg value is this
+  // plus the encoder offset. Effects off (or T = 20 °C, below the knees, zero
+  // clearance): q exactly. `loads` (optional) receives τ (zero without
+  // clearance).
+  V6 effective_joints(const V6& q, const StewartInputs& in, V6* loads = nullptr) const {
+    const StewartEffects& fx = effects_;
+    const double dT = in.temp - 20.0;
+    V6 v = q;
+    for (int i = 0; i < 6; ++i) {
+      const std::size_t k = std::size_t(i);
+      double d = 0;
+      if (fx.thermal[k] != 0) d += fx.thermal[k] * dT * (q(i) + errors_.encoder[k]);
+      if (fx.ramp_gain[k] != 0) {
+        const double over = std::max(0.0, q(i) - fx.ramp_knee[k]);
+        d += fx.ramp_gain[k] * over * over;
+      }
+      v(i) = q(i) + d;
+    }
+    if (loads != nullptr) loads->setZero();
+    if (fx.any_clearance()) {
+      const V6 tau = leg_loads(v);
+      if (!tau.allFinite()) return V6::Constant(std::nan(""));
+      for (int i = 0; i < 6; ++i) {
+        const double c = fx.clearance[std::size_t(i)];
+        if (c != 0 && tau(i) != 0) v(i) += tau(i) > 0 ? c : -c;
+      }
+      if (loads != nullptr) *loads = tau;
+    }
+    return v;
+  }
+
+  // FK with the effects: the pose reached for commands q at `in`.
+  StewartFkResult fk(const V6& q, const StewartInputs& in) const {
+    if (!effects_.any()) return fk(q);
+    return fk(effective_joints(q, in));
+  }
+
   // IK of this machine (a nominal simulator gives the nominal IK): the
   // platform is the tool pose with the tool offset taken off; each leg's
   // required x_i from its closure; q_i = x_i − encoder_i. No stroke limits.
@@ -170,6 +303,7 @@ class StewartSimulator {
 
  private:
   StewartErrors errors_;
+  StewartEffects effects_;
   Rigid home_;
   Rigid tool_;
   std::array<UpsLeg, 6> legs_;
@@ -179,6 +313,31 @@ class StewartSimulator {
 inline Dataset make_stewart_dataset(const StewartErrors& errors, const std::vector<V6>& commanded,
                                     const MeasurementSpec& spec) {
   return make_dataset(StewartSimulator(errors), StewartSimulator(), commanded, spec);
+}
+
+// Dataset of the erroneous machine with effects, commanded by the nominal IK
+// in the order given: `temps[k]` row k's structure temperature, °C (empty:
+// 20 °C, and no `temp` column), `roles[k]` its role (empty: cal, no `role`
+// column). No `dir` columns (no effect here follows the approach direction).
+// Noise as make_dataset (the same draws for the same seed and rows); with the
+// effects off and no temps / roles the rows equal make_stewart_dataset's.
+inline Dataset make_stewart_effect_dataset(const StewartErrors& errors, const StewartEffects& effects,
+                                           const std::vector<V6>& commanded, const MeasurementSpec& spec,
+                                           const std::vector<double>& temps = {},
+                                           const std::vector<std::string>& roles = {}) {
+  if (!temps.empty() && temps.size() != commanded.size()) throw std::invalid_argument("one temperature per pose");
+  if (!roles.empty() && roles.size() != commanded.size()) throw std::invalid_argument("one role per pose");
+  const StewartSimulator actual(errors, effects), nominal;
+  Dataset out = make_dataset_by(nominal, commanded, spec, [&](std::size_t i, DatasetRow& row) {
+    StewartInputs in;
+    if (!temps.empty()) in.temp = temps[i];
+    row.temp = in.temp;
+    if (!roles.empty()) row.role = roles[i];
+    return actual.fk(row.q, in);
+  });
+  out.has_role = !roles.empty();
+  out.has_temp = !temps.empty();
+  return out;
 }
 
 }  // namespace kincal::independent
