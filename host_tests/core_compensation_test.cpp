@@ -111,8 +111,8 @@ constexpr Crc32 crc_of(const char* s) {
   return c;
 }
 static_assert(crc_of("123456789").value() == 0xCBF43926u, "CRC-32/IEEE check value");
-static_assert(table_value_count<StewartMachine<double>>() == 212, "6-UPS table layout (leg_offset_sq: 12 more)");
-static_assert(table_value_count<HybridMachine<double>>() == 295, "hybrid table layout (156 source errors)");
+static_assert(table_value_count<StewartMachine<double>>() == 220, "6-UPS table layout (leg_offset_sq: 12 more; 16 user numbers: 8 more)");
+static_assert(table_value_count<HybridMachine<double>>() == 303, "hybrid table layout (156 source errors; 16 user numbers)");
 
 // What a generated header does: values, the CRC as a literal, static_assert.
 constexpr double kNominalValues[table_value_count<StewartMachine<double>>()] = {};

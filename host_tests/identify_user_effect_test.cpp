@@ -181,8 +181,9 @@ TEST(UserEffect, WhatCoresSlotCannotHoldIsRefusedWhenTheEffectIsMade) {
   EXPECT_NO_THROW(ki::UserJointEffect("ok", "d", {"u1"}, f, fd));
   EXPECT_THROW(ki::UserJointEffect("", "d", {"u1"}, f, fd), std::invalid_argument);
   EXPECT_THROW(ki::UserJointEffect("none", "d", {}, f, fd), std::invalid_argument);
-  EXPECT_THROW(ki::UserJointEffect("nine", "d", {"1", "2", "3", "4", "5", "6", "7", "8", "9"}, f, fd),
-               std::invalid_argument);
+  std::vector<std::string> one_too_many;  // core's slot holds kUserEffectParameters
+  for (int k = 0; k <= kincal::kUserEffectParameters; ++k) one_too_many.push_back("u" + std::to_string(k + 1));
+  EXPECT_THROW(ki::UserJointEffect("too_many", "d", one_too_many, f, fd), std::invalid_argument);
   EXPECT_THROW(ki::UserJointEffect("no_derivative", "d", {"u1"}, f, nullptr), std::invalid_argument);
 }
 

@@ -59,8 +59,18 @@ int run_identify_with_effects(const ki::Robot& robot, const std::string& data_pa
   for (std::size_t i = 0; i < report.rms_cal_um.size(); ++i)
     std::cout << "  pass " << i + 1 << ": cal residual RMS " << report.rms_cal_um[i] << " um\n";
   for (const ki::HeldParameter& h : report.held) {
-    std::cout << "  held at 0: " << h.effect << " " << h.parameter;
-    if (h.t == 0)
+    const double start = ki::find_effect(robot, h.effect)->start_values(robot)(Eigen::Index(h.index));
+    std::cout << "  held at ";
+    if (start == 0)
+      std::cout << "0";
+    else
+      std::cout << "its start " << start;
+    std::cout << ": " << h.effect << " " << h.parameter;
+    if (h.outside_base < ki::kBaseCopyShare)
+      std::cout << " (a copy of the base model: " << h.outside_base
+                << " of its column lies outside the base's span -- e.g. its input keeps one sign over the data, "
+                   "so it is an offset the base already has)\n";
+    else if (h.t == 0)
       std::cout << " (no column on this data: its input is zero or it is a combination of the others)\n";
     else
       std::cout << " (not significant beyond the base and the other parameters: t = " << h.t << ", p = " << h.p_value

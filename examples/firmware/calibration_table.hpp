@@ -2,7 +2,7 @@
 // regenerate it (the static_asserts below reject an edited value).
 //
 // robot: hybrid-seed000 (hybrid-3ups-up-3r), estimator: liu, data: measured.csv
-// Table format version 3 (core/calibration_table.hpp); values in its canonical order, 17 significant
+// Table format version 4 (core/calibration_table.hpp); values in its canonical order, 17 significant
 // digits (exact round trip), lengths in mm, angles in rad. The calibration table is what
 // `kincal compensate` runs on for this model; the nominal table is the firmware's fallback
 // when the calibration table fails its start-up check (docs/firmware.md).
@@ -13,8 +13,8 @@
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/machine_limits.hpp"
 
-static_assert(::kincal::kCalibrationTableVersion == 3,
-              "generated for calibration table format version 3; regenerate with this kincal");
+static_assert(::kincal::kCalibrationTableVersion == 4,
+              "generated for calibration table format version 4; regenerate with this kincal");
 
 namespace kincal::generated {
 
@@ -22,7 +22,7 @@ inline constexpr const char* kModelFile = "examples/firmware/model.json";
 inline constexpr const char* kRobot = "hybrid-seed000";
 inline constexpr const char* kGenerator = "kincal 0.1.0";
 inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::Hybrid;
-inline constexpr std::uint32_t kFormatVersion = 3;
+inline constexpr std::uint32_t kFormatVersion = 4;
 template <class Scalar> using Machine = ::kincal::HybridMachine<Scalar>;
 
 // The machine limits (core/machine_limits.hpp), from the nominal robot description,
@@ -40,7 +40,7 @@ inline constexpr ::kincal::MachineLimits<float> kLimits_float = {
     {5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164},  // max_correction
     10.0, 0.0099999997764825821, 0.0010000000474974513, 0.10000000149011612};  // max_geometry_error, max_scale, max_thermal, max_angle_error
 
-inline constexpr double kCalibrationValues_double[295] = {
+inline constexpr double kCalibrationValues_double[303] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -255,7 +255,7 @@ inline constexpr double kCalibrationValues_double[295] = {
     // effects.reference_temperature
     20.0,
     // effects.user
-    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.02, 0.02, 0.02,
     // bounds.min_joint
@@ -263,7 +263,7 @@ inline constexpr double kCalibrationValues_double[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kCalibrationCrc_double = 0x6D877096u;
+inline constexpr std::uint32_t kCalibrationCrc_double = 0x33E673BEu;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kCalibrationTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kCalibrationValues_double, kCalibrationCrc_double);
 static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_double,
@@ -271,7 +271,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_double) == kCalibrationCrc_d
 static_assert(::kincal::validate_table(kCalibrationTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
               "Calibration table (double): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kNominalValues_double[295] = {
+inline constexpr double kNominalValues_double[303] = {
     // machine.nominal.base_joints
     2.1431318985078682e-14, 350.0, 0.0, -303.10889132455367, -174.99999999999977, 0.0, 303.10889132455344, -175.00000000000014, 0.0,
     // machine.nominal.platform_joints
@@ -486,7 +486,7 @@ inline constexpr double kNominalValues_double[295] = {
     // effects.reference_temperature
     20.0,
     // effects.user
-    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.02, 0.02, 0.02,
     // bounds.min_joint
@@ -494,7 +494,7 @@ inline constexpr double kNominalValues_double[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.8999999999999999, 1.3999999999999999, 1.3999999999999999,
 };
-inline constexpr std::uint32_t kNominalCrc_double = 0xB8CC3619u;
+inline constexpr std::uint32_t kNominalCrc_double = 0x435F8469u;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<double>> kNominalTable_double =
     ::kincal::table_from_values<::kincal::HybridMachine<double>>(kNominalValues_double, kNominalCrc_double);
 static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
@@ -502,7 +502,7 @@ static_assert(::kincal::table_crc(kNominalTable_double) == kNominalCrc_double,
 static_assert(::kincal::validate_table(kNominalTable_double, kLimits_double) == ::kincal::CompensationStatus::Ok,
               "Nominal table (double): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kCalibrationValues_float[295] = {
+inline constexpr double kCalibrationValues_float[303] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -717,7 +717,7 @@ inline constexpr double kCalibrationValues_float[295] = {
     // effects.reference_temperature
     20.0,
     // effects.user
-    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164,
     // bounds.min_joint
@@ -725,7 +725,7 @@ inline constexpr double kCalibrationValues_float[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kCalibrationCrc_float = 0x6A88F6E4u;
+inline constexpr std::uint32_t kCalibrationCrc_float = 0x318C1B6Du;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kCalibrationTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kCalibrationValues_float, kCalibrationCrc_float);
 static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_float,
@@ -733,7 +733,7 @@ static_assert(::kincal::table_crc(kCalibrationTable_float) == kCalibrationCrc_fl
 static_assert(::kincal::validate_table(kCalibrationTable_float, kLimits_float) == ::kincal::CompensationStatus::Ok,
               "Calibration table (float): fails validate_table (values, bounds, machine limits)");
 
-inline constexpr double kNominalValues_float[295] = {
+inline constexpr double kNominalValues_float[303] = {
     // machine.nominal.base_joints
     2.1431319311435507e-14, 350.0, 0.0, -303.10888671875, -175.0, 0.0, 303.10888671875, -175.0, 0.0,
     // machine.nominal.platform_joints
@@ -948,7 +948,7 @@ inline constexpr double kNominalValues_float[295] = {
     // effects.reference_temperature
     20.0,
     // effects.user
-    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
     // bounds.max_correction
     5.0, 5.0, 5.0, 0.019999999552965164, 0.019999999552965164, 0.019999999552965164,
     // bounds.min_joint
@@ -956,7 +956,7 @@ inline constexpr double kNominalValues_float[295] = {
     // bounds.max_joint
     1178.0, 1178.0, 1178.0, 2.9000000953674316, 1.3999999761581421, 1.3999999761581421,
 };
-inline constexpr std::uint32_t kNominalCrc_float = 0x2F83149Eu;
+inline constexpr std::uint32_t kNominalCrc_float = 0x8DB7100Du;
 inline constexpr ::kincal::CalibrationTable<::kincal::HybridMachine<float>> kNominalTable_float =
     ::kincal::table_from_values<::kincal::HybridMachine<float>>(kNominalValues_float, kNominalCrc_float);
 static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,

@@ -550,7 +550,7 @@ void DiagnosisRun::stack_candidates() {
       d.ranking.push_back(t);
       continue;
     }
-    candidates.push_back(e.get());
+    candidates.push_back(e);
     cal.G[e->name()] = detail::effect_columns(robot, *e, base, false);
     test.G[e->name()] = detail::effect_columns(robot, *e, base, true);
   }

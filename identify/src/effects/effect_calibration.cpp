@@ -86,6 +86,29 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   // The residual at the solution (y itself: the base is at its minimum for
   // these effect values, and the effect step has converged).
   const double sigma2 = y.squaredNorm() / dof;
+  // First, a parameter whose column is (to kBaseCopyShare) in the span of
+  // the base design: the least outside, held whatever its t.
+  {
+    MatrixXd Hs = H;
+    for (Index j = 0; j < Hs.cols(); ++j)
+      if (Hs.col(j).norm() > 0) Hs.col(j) /= Hs.col(j).norm();
+    const Eigen::CompleteOrthogonalDecomposition<MatrixXd> base_span(Hs);
+    std::optional<HeldParameter> copy;
+    Index c = H.cols();
+    for (const Effect* e : list) {
+      const std::vector<std::string> names = e->parameter_names(robot);
+      const std::vector<bool>& h = held.at(e->name());
+      for (std::size_t j = 0; j < names.size(); ++j) {
+        if (h[j]) continue;
+        const VectorXd g = X.col(c++);
+        if (!(g.norm() > 0)) continue;
+        const double outside = (g - Hs * base_span.solve(g)).norm() / g.norm();
+        if (outside < kBaseCopyShare && (!copy || outside < copy->outside_base))
+          copy = HeldParameter{e->name(), names[j], j, 0.0, 1.0, std::size_t(free), outside};
+      }
+    }
+    if (copy) return copy;
+  }
   std::optional<HeldParameter> worst;
   Index c = H.cols();
   for (const Effect* e : list) {

@@ -55,7 +55,7 @@
 namespace kincal {
 
 // Bumped whenever the layout or the meaning of a table value changes.
-inline constexpr std::uint32_t kCalibrationTableVersion = 3;  // 2: effects.user; 3: the 6-UPS leg_offset_sq
+inline constexpr std::uint32_t kCalibrationTableVersion = 4;  // 2: effects.user; 3: the 6-UPS leg_offset_sq; 4: 16 user numbers (formula effects)
 
 enum class MachineFamily : std::uint8_t {
   Stewart6Ups = 1,  // stewart-6ups (seed 001)

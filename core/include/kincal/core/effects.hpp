@@ -52,7 +52,9 @@ template <class Scalar> struct EffectInputs;
 // It runs on the controller every NC point: no heap, no exceptions, bounded
 // time; whatever it returns is checked (a non-finite Δq is a status, a large
 // one is caught by the correction bound).
-constexpr int kUserEffectParameters = 8;
+// The same slot holds the numbers of a machine's formula effects
+// (formula_effects.hpp): a model has either.
+constexpr int kUserEffectParameters = 16;
 template <class Scalar>
 using UserJointError = Scalar (*)(const Scalar* u, int joint, const Vec6<Scalar>& q, const EffectInputs<Scalar>& in);
 

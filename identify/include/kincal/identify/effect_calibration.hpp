@@ -45,7 +45,14 @@ struct HeldParameter {
   double t = 0;                // estimate / standard error in the joint fit (0: not identifiable)
   double p_value = 1;          // two-sided, from t² ~ F(1, n − rank)
   std::size_t free_parameters = 0;  // free effect parameters when it was tested (Bonferroni factor)
+  // The part of its column outside the base design's span, relative to the
+  // column (1: orthogonal to the base). Below kBaseCopyShare the parameter
+  // is a copy of base parameters (a clearance whose load never changes sign
+  // is an encoder offset): held before any t test, which the model's own
+  // small mismatches would otherwise pass (#32: 12 mm against 12 mm).
+  double outside_base = 1;
 };
+inline constexpr double kBaseCopyShare = 1e-3;
 
 struct EffectCalibrationReport {
   std::string base;  // how the base was fitted and, for the hybrid, why that estimator (printed by identify)
