@@ -1,5 +1,8 @@
 #include "effects/base_fit.hpp"
 
+#include "kincal/identify/formula_candidate.hpp"
+#include "kincal/identify/input_error.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -163,6 +166,25 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
     PoseRow& row = out.rows[k];
     if (!nodes[k]) continue;
     row.q = Eigen::VectorXd(effect_actual_joints(robot, e, *nodes[k]));
+    // A pose-kind formula's twist taken off what was measured (the reverse
+    // of simulate's: the tool landed twist away from its kinematics' pose);
+    // targets move with the tool, about the commanded tool point.
+    const Vec6<double> twist = formula_pose_twist(robot, e, *nodes[k], nodes[k]->q);
+    if (!twist.isZero()) {
+      if (data.in_instrument_frame && data.has_targets)
+        throw InputError(data.file, row.line, 0,
+                         "a pose-kind formula effect with targets in the instrument's frame is not supported yet");
+      if (row.measured)
+        row.measured = moved_by_twist(Pose<double>::from_xyz_rpy(*row.measured), -twist).to_xyz_rpy();
+      if (row.targets) {
+        const Pose<double> back = moved_by_twist(Pose<double>(), -twist);
+        const Vec3<double> p = nodes[k]->pose.p;
+        for (int t = 0; t < data.target_columns(); ++t) {
+          const Vec3<double> moved = row.targets->col(t) - twist.head<3>() - p;
+          row.targets->col(t) = p + back.R * moved;
+        }
+      }
+    }
     if (!row.temp || e.thermal == 0) continue;
     // The thermal effect moves the reached pose (core thermal_reached: the
     // position scaled about the thermal origin, no rotation), so a measured

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+
+#include <Eigen/Geometry>
 #include <limits>
 #include <utility>
 
@@ -115,6 +117,25 @@ Vec6<double> formula_joint_error(const Robot& robot, const EffectParameters<doub
     for (int o = 0; o < f.output_count(); ++o) dq(f.joints()[std::size_t(o)] - 1) += f.value(o, vars.data(), params);
   }
   return dq;
+}
+
+Vec6<double> formula_pose_twist(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
+                                const Vec6<double>& q) {
+  Vec6<double> twist = Vec6<double>::Zero();
+  bool any = false;
+  for (const auto& c : robot.formula_effects) any = any || c->formula().kind() == FormulaKind::Pose;
+  if (!any) return twist;
+  const std::vector<double> vars = formula_variables(robot, node, q);
+  HostFormulaEffects(robot).add_pose_twist(effects.user.data(), vars.data(), twist.data());
+  return twist;
+}
+
+Pose<double> moved_by_twist(const Pose<double>& pose, const Vec6<double>& twist) {
+  Pose<double> out = pose;
+  out.p += twist.head<3>();
+  const Vec3<double> w = twist.tail<3>();
+  if (w.norm() > 0) out.R = Eigen::AngleAxisd(w.norm(), w / w.norm()).toRotationMatrix() * pose.R;
+  return out;
 }
 
 void HostFormulaEffects::add_joint_error(const double* params, const double* vars, double* dq) const {

@@ -5,6 +5,7 @@
 #include <random>
 
 #include "families/family.hpp"
+#include "kincal/identify/formula_candidate.hpp"
 #include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/input_error.hpp"
 
@@ -43,6 +44,11 @@ ReachedPose run_row(const ActualMachine& machine, const PoseRow& row, const RowE
   ReachedPose out = machine.reach(row, joint_error);
   if (out.status == Status::Ok && effects.node != nullptr && row.temp)
     out.pose = thermal_reached(*effects.parameters, out.pose, *row.temp);
+  // A pose-kind formula's twist of the tool, evaluated at the commands
+  // (core/formula_effects.hpp: the controller takes it off the pose).
+  if (out.status == Status::Ok && effects.node != nullptr)
+    out.pose = moved_by_twist(out.pose, formula_pose_twist(*effects.robot, *effects.parameters, *effects.node,
+                                                           effects.node->q));
   return out;
 }
 

@@ -53,6 +53,14 @@ std::vector<double> formula_variables(const Robot& robot, const EffectNode& node
 Vec6<double> formula_joint_error(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
                                  const Vec6<double>& q);
 
+// The twist (dx dy dz drx dry drz; mm, rad, the pose frame) of the robot's
+// pose-kind formula effects at a node with joints `q` (zero without any):
+// the tool lands at p + d, exp(ω)·R where its kinematics put p, R.
+Vec6<double> formula_pose_twist(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
+                                const Vec6<double>& q);
+// `pose` moved by a twist (or back, with −twist).
+Pose<double> moved_by_twist(const Pose<double>& pose, const Vec6<double>& twist);
+
 // The robot's formula effects as the policy of core's Compensator
 // (core/formula_effects.hpp) on the host, at double: `kincal compensate`
 // runs the controller's routine with the formulas compiled from the robot
