@@ -19,8 +19,8 @@ CLI::App* add_effects_command(CLI::App& app, EffectsArgs& a) {
   CLI::App* e = app.add_subcommand(
       "effects", "list every effect: its parameters, what it models and the measurement columns it needs");
   e->add_option("--robot", a.robot,
-                "built-in robot name or robot description file: its parameter names and machine data "
-                "(default: stewart-seed001)");
+                "built-in robot name or robot description file: its parameter names, machine data and the "
+                "formula effects of its `effects` key (default: stewart-seed001)");
   e->add_flag("--json", a.json, "print the list as JSON");
   return e;
 }

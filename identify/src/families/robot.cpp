@@ -135,6 +135,11 @@ Robot parse_robot(const std::string& text, const std::string& file) {
   Robot robot = f->parse(doc, r);
   robot.name = name;
   read_formula_effects_into(robot, doc, text, file);
+  // The controller's hybrid statics take a weight at the tool point only
+  // (core/compensation.hpp prepare): an off-centre payload would be fitted
+  // and compensated with different loads.
+  if (robot.is_hybrid() && !robot.payload_com.isZero())
+    r.fail("/payload/com", "the hybrid's payload acts at the tool point: 'com' must be [0, 0, 0] (not yet supported elsewhere)");
   return robot;
 }
 
