@@ -85,18 +85,9 @@ double compensated_rms(const std::string& robot, const std::string& data, const 
                 (effect.empty() ? "" : " --effects " + effect));
   EXPECT_EQ(id.code, 0) << tag << ": " << id.err;
   if (id.code != 0) return -1;
-  std::ostringstream poses;
-  poses.precision(17);
-  poses << "id,x,y,z,rx,ry,rz,temp\n";
   std::vector<const ind::DatasetRow*> test;
-  for (const auto& r : d.rows)
-    if (r.role == "test") {
-      test.push_back(&r);
-      poses << r.id;
-      for (int k = 0; k < 6; ++k) poses << "," << r.commanded(k);
-      poses << "," << r.temp << "\n";
-    }
-  const std::string poses_path = kincal_test::write_in(kDir, tag + "_test_poses.csv", poses.str());
+  const std::string poses_path =
+      kincal_test::write_in(kDir, tag + "_test_poses.csv", ind::held_out_poses_csv(d, test));
   const std::string joints = kDir + "/" + tag + "_joints.csv";
   const kincal_test::ToolRun comp = kincal_test::run_tool_in(
       kDir, "compensate --robot " + robot + " --model " + model + " --poses " + poses_path + " --out " + joints);

@@ -103,18 +103,9 @@ Held compensate(const std::string& data, const std::string& tag, const std::stri
                 (effects.empty() ? "" : " --effects " + effects));
   EXPECT_EQ(id.code, 0) << tag << ": " << id.err;
   if (id.code != 0) return h;
-  std::ostringstream poses;
-  poses.precision(17);
-  poses << "id,x,y,z,rx,ry,rz,temp\n";
   std::vector<const ind::DatasetRow*> test;
-  for (const auto& r : d.rows)
-    if (r.role == "test") {
-      test.push_back(&r);
-      poses << r.id;
-      for (int k = 0; k < 6; ++k) poses << "," << r.commanded(k);
-      poses << "," << r.temp << "\n";
-    }
-  const std::string poses_path = kincal_test::write_in(kDir, tag + "_test_poses.csv", poses.str());
+  const std::string poses_path =
+      kincal_test::write_in(kDir, tag + "_test_poses.csv", ind::held_out_poses_csv(d, test));
   const std::string joints = kDir + "/" + tag + "_joints.csv";
   const kincal_test::ToolRun comp = kincal_test::run_tool_in(
       kDir, "compensate --robot " + kRobot + " --model " + model + " --poses " + poses_path + " --out " + joints);

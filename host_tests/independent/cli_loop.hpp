@@ -48,6 +48,22 @@ inline std::string poses_csv(const std::vector<V6>& poses) {
   return s.str();
 }
 
+// The held-out rows (role "test") of `d` as a poses file's text with their
+// temperatures (`temp`), and those rows in order in `test`.
+inline std::string held_out_poses_csv(const Dataset& d, std::vector<const DatasetRow*>& test) {
+  std::ostringstream poses;
+  poses.precision(17);
+  poses << "id,x,y,z,rx,ry,rz,temp\n";
+  for (const auto& r : d.rows)
+    if (r.role == "test") {
+      test.push_back(&r);
+      poses << r.id;
+      for (int k = 0; k < 6; ++k) poses << "," << r.commanded(k);
+      poses << "," << r.temp << "\n";
+    }
+  return poses.str();
+}
+
 struct HeldOut {
   double position_um = 0;  // worst |reached − asked|, µm
   double rotation_urad = 0;

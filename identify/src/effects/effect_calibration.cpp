@@ -86,6 +86,16 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   // The residual at the solution (y itself: the base is at its minimum for
   // these effect values, and the effect step has converged).
   const double sigma2 = y.squaredNorm() / dof;
+  // Each free effect parameter with its column's index in X.
+  const auto each_free = [&](auto visit) {
+    Index c = H.cols();
+    for (const Effect* e : list) {
+      const std::vector<std::string> names = e->parameter_names(robot);
+      const std::vector<bool>& h = held.at(e->name());
+      for (std::size_t j = 0; j < names.size(); ++j)
+        if (!h[j]) visit(*e, names[j], j, c++);
+    }
+  };
   // First, a parameter whose column is (to kBaseCopyShare) in the span of
   // the base design: the least outside, held whatever its t.
   {
@@ -94,42 +104,29 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
       if (Hs.col(j).norm() > 0) Hs.col(j) /= Hs.col(j).norm();
     const Eigen::CompleteOrthogonalDecomposition<MatrixXd> base_span(Hs);
     std::optional<HeldParameter> copy;
-    Index c = H.cols();
-    for (const Effect* e : list) {
-      const std::vector<std::string> names = e->parameter_names(robot);
-      const std::vector<bool>& h = held.at(e->name());
-      for (std::size_t j = 0; j < names.size(); ++j) {
-        if (h[j]) continue;
-        const VectorXd g = X.col(c++);
-        if (!(g.norm() > 0)) continue;
-        const double outside = (g - Hs * base_span.solve(g)).norm() / g.norm();
-        if (outside < kBaseCopyShare && (!copy || outside < copy->outside_base))
-          copy = HeldParameter{e->name(), names[j], j, 0.0, 1.0, std::size_t(free), outside};
-      }
-    }
+    each_free([&](const Effect& e, const std::string& name, std::size_t j, Index c) {
+      const VectorXd g = X.col(c);
+      if (!(g.norm() > 0)) return;
+      const double outside = (g - Hs * base_span.solve(g)).norm() / g.norm();
+      if (outside < kBaseCopyShare && (!copy || outside < copy->outside_base))
+        copy = HeldParameter{e.name(), name, j, 0.0, 1.0, std::size_t(free), outside};
+    });
     if (copy) return copy;
   }
   std::optional<HeldParameter> worst;
-  Index c = H.cols();
-  for (const Effect* e : list) {
-    const std::vector<std::string> names = e->parameter_names(robot);
-    const std::vector<bool>& h = held.at(e->name());
-    for (std::size_t j = 0; j < names.size(); ++j) {
-      if (h[j]) continue;
-      HeldParameter p{e->name(), names[j], j, 0.0, 1.0, std::size_t(free)};
-      // Variance of the scaled coefficient: Σ_k V_ck² / σ_k² over the rank;
-      // a column with a part outside the rank (collinear) is not identified.
-      const VectorXd v = svd.matrixV().row(c).transpose();
-      const double outside = v.tail(v.size() - rank).squaredNorm();
-      if (X.col(c).norm() > 0 && outside < 1e-12) {
-        const double var = (v.head(rank).array().square() / sv.head(rank).array().square()).sum() * sigma2;
-        p.t = values.values.at(e->name())(Index(j)) * scale(c) / std::sqrt(var);
-        p.p_value = f_distribution_upper_tail(p.t * p.t, 1.0, dof);
-      }
-      if (!worst || p.p_value > worst->p_value) worst = p;
-      ++c;
+  each_free([&](const Effect& e, const std::string& name, std::size_t j, Index c) {
+    HeldParameter p{e.name(), name, j, 0.0, 1.0, std::size_t(free)};
+    // Variance of the scaled coefficient: Σ_k V_ck² / σ_k² over the rank;
+    // a column with a part outside the rank (collinear) is not identified.
+    const VectorXd v = svd.matrixV().row(c).transpose();
+    const double outside = v.tail(v.size() - rank).squaredNorm();
+    if (X.col(c).norm() > 0 && outside < 1e-12) {
+      const double var = (v.head(rank).array().square() / sv.head(rank).array().square()).sum() * sigma2;
+      p.t = values.values.at(e.name())(Index(j)) * scale(c) / std::sqrt(var);
+      p.p_value = f_distribution_upper_tail(p.t * p.t, 1.0, dof);
     }
-  }
+    if (!worst || p.p_value > worst->p_value) worst = p;
+  });
   return worst;
 }
 
