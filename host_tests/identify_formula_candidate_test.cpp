@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -244,6 +245,25 @@ TEST(FormulaCandidate, APoseFormulaIsInjectedIdentifiedAndTakenOff) {
     ++checked;
   }
   EXPECT_GT(checked, 50);
+}
+
+TEST(FormulaCandidate, AFormulaNotFiniteAtANodeNamesTheNode) {
+  // sqrt(q - 240) is not finite where leg 3 is shorter than 240 mm.
+  const std::string root = R"json([{"name": "root", "kind": "joint", "joints": [3], "per_joint": ["r"],
+      "formula": "r * sqrt(q - 240)"}])json";
+  const std::string dir = "identify_formula_candidate";
+  const std::string robot = kincal_test::write_in(dir, "root_robot.json", description(root));
+  const std::string poses = std::string(KINCAL_SOURCE_DIR) + "/examples/seed001/diagnosis_poses.csv";
+  const std::string measured = dir + "/root_measured.csv";
+  ASSERT_EQ(kincal_test::run_tool_in(dir, "simulate --robot stewart-seed001 --poses " + poses + " --out " + measured).code,
+            0);
+  const kincal_test::ToolRun id =
+      kincal_test::run_tool_in(dir, "identify --robot " + robot + " --data " + measured + " --effects root --out " +
+                                        dir + "/root_model.json");
+  EXPECT_EQ(id.code, 1);
+  EXPECT_NE(id.err.find("not finite at node 'N"), std::string::npos) << id.err;
+  EXPECT_NE(id.err.find("q3 = "), std::string::npos) << id.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/root_model.json")) << "nothing written";
 }
 
 TEST(FormulaCandidate, TheEffectsCommandListsTheDescriptionsFormulas) {

@@ -256,6 +256,7 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
     const PoseRow& row = table.rows[k];
     EffectNode n;
     n.pose = Pose<double>::from_xyz_rpy(row.commanded);
+    n.id = row.id;
     Vec6<double> q_ik;
     if (!family.forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
     n.q = row.q ? Vec6<double>(row.q->head<6>()) : q_ik;

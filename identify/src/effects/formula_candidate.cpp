@@ -58,11 +58,17 @@ void FormulaCandidate::twist_columns(const Robot& robot, const EffectParameters<
   const std::vector<double> vars = formula_variables(robot, node, node.q);
   const Eigen::Index n = columns.cols();
   Eigen::VectorXd params = frame.user.segment(offset_, n);
-  Eigen::VectorXd grad(n);
   columns.setZero();
   const int outputs = formula_->output_count();
+  // Values and derivatives checked: a formula that is not finite at a node
+  // (sqrt of a negative, a division by zero) is an InputError naming the
+  // node, the output and the numbers the formula read there.
+  thread_local FormulaWorkspace ws;
+  std::vector<double> values(static_cast<std::size_t>(outputs));
+  std::vector<double> jacobian(static_cast<std::size_t>(outputs) * static_cast<std::size_t>(n));
+  formula_->evaluate(vars.data(), params.data(), values.data(), jacobian.data(), "'" + node.id + "'", ws);
   for (int o = 0; o < outputs; ++o) {
-    formula_->gradient(o, vars.data(), params.data(), grad.data());
+    const Eigen::Map<const Eigen::VectorXd> grad(jacobian.data() + std::size_t(o) * std::size_t(n), n);
     if (formula_->kind() == FormulaKind::Joint) {
       const int joint = formula_->joints()[std::size_t(o)] - 1;
       columns += node.joint_twist.col(joint) * grad.transpose();
@@ -75,6 +81,24 @@ void FormulaCandidate::twist_columns(const Robot& robot, const EffectParameters<
 void FormulaCandidate::apply(const Robot&, const Eigen::VectorXd& values, EffectParameters<double>& out) const {
   out.user.segment(offset_, values.size()) += values;
 }
+
+namespace {
+
+// The checked evaluation of every formula at a node where the sum was not
+// finite: throws the InputError that names the effect, the node, the output
+// and the numbers it read (FormulaEffect::evaluate).
+[[noreturn]] void throw_not_finite(const Robot& robot, const EffectParameters<double>& effects, const EffectNode& node,
+                                   const std::vector<double>& vars) {
+  FormulaWorkspace ws;
+  for (const auto& c : robot.formula_effects) {
+    const FormulaEffect& f = c->formula();
+    std::vector<double> values(static_cast<std::size_t>(f.output_count()));
+    f.evaluate(vars.data(), effects.user.data() + c->offset(), values.data(), nullptr, "'" + node.id + "'", ws);
+  }
+  throw InputError("formula effects are not finite at node '" + node.id + "'");
+}
+
+}  // namespace
 
 std::vector<double> formula_variables(const Robot& robot, const EffectNode& node, const Vec6<double>& q) {
   FormulaLayout lay;
@@ -116,6 +140,7 @@ Vec6<double> formula_joint_error(const Robot& robot, const EffectParameters<doub
     const double* params = effects.user.data() + c->offset();
     for (int o = 0; o < f.output_count(); ++o) dq(f.joints()[std::size_t(o)] - 1) += f.value(o, vars.data(), params);
   }
+  if (!dq.allFinite()) throw_not_finite(robot, effects, node, vars);
   return dq;
 }
 
@@ -127,6 +152,7 @@ Vec6<double> formula_pose_twist(const Robot& robot, const EffectParameters<doubl
   if (!any) return twist;
   const std::vector<double> vars = formula_variables(robot, node, q);
   HostFormulaEffects(robot).add_pose_twist(effects.user.data(), vars.data(), twist.data());
+  if (!twist.allFinite()) throw_not_finite(robot, effects, node, vars);
   return twist;
 }
 

@@ -34,6 +34,7 @@ struct EffectNode {
   // The robot's formula inputs (Robot::formula_inputs, that order) from the
   // row's columns; NaN where the data has none.
   std::vector<double> formula_inputs;
+  std::string id;  // the row's id (messages)
 };
 
 class Effect {
