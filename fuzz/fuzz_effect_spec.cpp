@@ -1,5 +1,5 @@
-// libFuzzer target: `--effect NAME:PARAM=VALUE` (identify/parameters.hpp
-// parse_effect_option) and setting it on both built-in robots, as simulate does.
+// libFuzzer target: `--effect NAME:PARAM=VALUE[,PARAM=VALUE...]`
+// (identify/parameters.hpp parse_effect_options) and setting it on both built-in robots, as simulate does.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -16,14 +16,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   kincal::fuzz::run(
       [&] {
-        const ki::EffectSetting s = ki::parse_effect_option(text);
-        kincal::fuzz::check_finite(s.value, "effect value");
-        for (const ki::Robot* r : {&stewart, &hybrid}) {
-          ki::EffectValues v;
-          try {
-            v.set(*r, s.effect, s.parameter, s.value);
-          } catch (const ki::InputError& e) {
-            kincal::fuzz::check_message(e, "");
+        for (const ki::EffectSetting& s : ki::parse_effect_options(text)) {
+          kincal::fuzz::check_finite(s.value, "effect value");
+          for (const ki::Robot* r : {&stewart, &hybrid}) {
+            ki::EffectValues v;
+            try {
+              v.set(*r, s.effect, s.parameter, s.value);
+            } catch (const ki::InputError& e) {
+              kincal::fuzz::check_message(e, "");
+            }
           }
         }
       },

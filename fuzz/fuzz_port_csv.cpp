@@ -26,6 +26,9 @@ template <class Scalar> void feed_all(const std::uint8_t* data, std::size_t size
   if (compensator.home_command(home) != kincal::CompensationStatus::Ok) std::abort();
   auto state = compensator.start(home);
   kincal::port::PoseCsvReader<Scalar> reader;
+  // Formula effects' columns too: `time` and two named inputs.
+  static constexpr const char* kInputs[2] = {"spindle_temp", "humidity"};
+  reader.set_inputs(kInputs, 2);
   std::vector<char> line;
   kincal::port::NcInput<Scalar> point;
   kincal::port::CsvId id;

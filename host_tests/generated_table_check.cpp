@@ -21,8 +21,10 @@ template <class Scalar> void check_scalar() {
   static_assert(validate_table(Tables::calibration(), Tables::limits()) == CompensationStatus::Ok, "calibration");
   static_assert(validate_table(Tables::nominal(), Tables::limits()) == CompensationStatus::Ok, "nominal");
   static_assert(Tables::calibration().family == generated::kFamily, "family");
-  const Compensator<generated::Machine<Scalar>> calibrated(Tables::calibration(), Tables::limits());
-  const Compensator<generated::Machine<Scalar>> nominal(Tables::nominal(), Tables::limits());
+  static_assert(!generated::Formulas<Scalar>::present, "this model has no formula effects");
+  const Compensator<generated::Machine<Scalar>, generated::Formulas<Scalar>> calibrated(Tables::calibration(),
+                                                                                       Tables::limits());
+  const Compensator<generated::Machine<Scalar>, generated::Formulas<Scalar>> nominal(Tables::nominal(), Tables::limits());
   ASSERT_EQ(calibrated.status(), CompensationStatus::Ok);
   ASSERT_EQ(nominal.status(), CompensationStatus::Ok);
   Vec6<Scalar> q_cal, q_nom;

@@ -117,3 +117,22 @@ TEST(identifyParameters, EffectOptionsAreParsedAndCheckedAgainstTheRegistry) {
   for (const std::string bad : {"scale", "scale:s1", "scale:=1", ":s1=1", "scale:s1=", "scale:s1=abc", "scale:s1=nan"})
     EXPECT_THROW(ki::parse_effect_option(bad), ki::InputError) << bad;
 }
+
+TEST(identifyParameters, OneEffectOptionMaySetSeveralNumbers) {
+  const std::vector<ki::EffectSetting> e = ki::parse_effect_options("scale:s1=1e-4,s3=-2.5e-5");
+  ASSERT_EQ(e.size(), 2u);
+  EXPECT_EQ(e[0].effect, "scale");
+  EXPECT_EQ(e[0].parameter, "s1");
+  EXPECT_EQ(e[0].value, 1e-4);
+  EXPECT_EQ(e[1].effect, "scale");
+  EXPECT_EQ(e[1].parameter, "s3");
+  EXPECT_EQ(e[1].value, -2.5e-5);
+  EXPECT_EQ(ki::parse_effect_options("thermal:c=1.2e-5").size(), 1u);
+  for (const std::string bad : {"scale:s1=1e-4,", "scale:s1=1e-4,,s2=1", "scale:s1=1e-4,s2", "scale:s1=1e-4,s2=x", "scale"})
+    try {
+      ki::parse_effect_options(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const ki::InputError& err) {
+      EXPECT_TRUE(contains(err.what(), "--effect '")) << err.what();
+    }
+}

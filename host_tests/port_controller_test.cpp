@@ -107,10 +107,10 @@ std::vector<NcInput<double>> stewart_path(int n) {
 // ---- the rig: emulated registers and stream, a controller, a producer and a
 // consumer that the test makes early or late.
 
-template <class Machine, std::size_t In = 4, std::size_t Out = 4> struct Rig {
+template <class Machine, std::size_t In = 4, std::size_t Out = 4, class Formulas = NoFormulaEffects> struct Rig {
   using Table = CalibrationTable<Machine>;
   using Stream = emulator::NcStream<double, In, Out>;
-  using Ctl = Controller<Machine, emulator::EncoderRegisters, Stream>;
+  using Ctl = Controller<Machine, emulator::EncoderRegisters, Stream, Formulas>;
 
   emulator::EncoderRegisters regs;
   Stream stream;
@@ -272,6 +272,74 @@ TEST(PortController, AUserEffectComesWithTheTableAndItsCodeWithTheConfig) {
   // The plug-in changed the commands (by the effect's size, micrometres).
   EXPECT_GT(effect, 1e-4);
   EXPECT_LT(effect, 0.1);
+}
+
+// A formula-effect policy as `kincal table` generates one (core/
+// formula_effects.hpp), written by hand: leg 3 drifts with the time stamp
+// and with the point's first named input, leg 5 with the temperature. The
+// controller hands the stream's time and inputs to the compensator.
+struct DriftFormulas {
+  static constexpr bool present = true;
+  void add_joint_error(const double* params, const double* vars, double* dq) const {
+    dq[2] += params[0] * vars[FormulaSlot::time] + params[1] * vars[FormulaSlot::input];
+    dq[4] += params[2] * (vars[FormulaSlot::temp] - 20) * vars[FormulaSlot::q + 4];
+  }
+  void add_pose_twist(const double*, const double*, double*) const {}
+  bool has_pose() const { return false; }
+  int input_count() const { return 1; }
+  double payload_weight() const { return 1.0; }
+  Vec3<double> payload_com() const { return Vec3<double>::Zero(); }
+};
+
+TEST(PortController, FormulaEffectsReadTheStreamsTimeAndInputs) {
+  static const StewartCalibrationTabled with_formulas = [] {
+    StewartCalibrationTabled c = stewart_calibrated();
+    c.effects.user[0] = 2e-4;   // mm/s
+    c.effects.user[1] = -3e-3;  // mm per input unit
+    c.effects.user[2] = 1.2e-5; // 1/°C
+    return seal_table(c);
+  }();
+  std::vector<NcInput<double>> in = stewart_path(10);
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    in[k].time = 0.5 * double(k);
+    in[k].inputs[0] = 2.0 - 0.3 * double(k);
+    in[k].temperature = 21 + 0.4 * double(k);
+    in[k].has_temperature = true;
+  }
+  in[6].inputs[0] = kNan;  // a sensor that failed: held with a status, never sent
+  Rig<StewartM, 4, 4, DriftFormulas> rig(with_formulas, stewart_nominal());
+  rig.config.has_initial_command = true;  // the home pose has no input: where the machine stands
+  ASSERT_EQ(Compensator<StewartM>(stewart_nominal(), trust_table_bounds).home_command(rig.config.initial_command), CS::Ok);
+  rig.run(in);
+  expect_no_point_lost(rig.out, in);
+
+  // The same stream through the compensator directly.
+  const Compensator<StewartM, DriftFormulas> direct_formulas(with_formulas, rig.limits);
+  auto state = direct_formulas.start(rig.config.initial_command);
+  double moved = 0;
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    NcPoint<double> p;
+    p.pose = Pose<double>::from_xyz_rpy(in[k].pose);
+    p.temperature = in[k].temperature;
+    p.has_temperature = true;
+    p.time = in[k].time;
+    p.inputs = in[k].inputs;
+    Vec6<double> q;
+    const CS st = direct_formulas.compensate(state, p, q);
+    EXPECT_EQ(rig.out[k].status, st) << k;
+    if (k == 6) {
+      EXPECT_EQ(st, CS::InvalidInput);
+      EXPECT_TRUE(rig.out[k].flags & kCommandHeld);
+      continue;
+    }
+    ASSERT_EQ(st, CS::Ok) << k;
+    EXPECT_LT((rig.raw(rig.out[k]) - q).cwiseAbs().maxCoeff(), 1e-12) << k;
+    Vec6<double> plain;
+    auto s2 = Compensator<StewartM>(stewart_calibrated(), rig.limits).start(q);
+    ASSERT_EQ(Compensator<StewartM>(stewart_calibrated(), rig.limits).compensate(s2, p, plain), CS::Ok);
+    moved = std::max(moved, std::abs(q(2) - plain(2)));
+  }
+  EXPECT_GT(moved, 1e-3);  // the formulas moved leg 3 (time and input terms)
 }
 
 // A user effect that returns NaN: no NaN leaves core; every point is held

@@ -125,8 +125,9 @@ struct Row {
   std::string id;
 };
 
-std::vector<Row> read_all(const std::string& text) {
+std::vector<Row> read_all(const std::string& text, const char* const* inputs = nullptr, int input_count = 0) {
   PoseCsvReader<double> reader;
+  reader.set_inputs(inputs, input_count);
   std::vector<Row> rows;
   std::size_t pos = 0;
   while (pos < text.size()) {
@@ -188,6 +189,36 @@ TEST(PortCsv, UsesTheSeqColumnAndFlagsBadRowsWithoutLosingThem) {
   }
   EXPECT_TRUE(std::isnan(rows[4].point.pose(0)));
   EXPECT_TRUE(std::isinf(rows[4].point.pose(5)));
+}
+
+TEST(PortCsv, ReadsTheTimeAndTheFormulasNamedInputs) {
+  // Formula effects (core/formula_effects.hpp): `time` and the machine's
+  // named inputs, in the machine's order whatever the file's column order.
+  static constexpr const char* kNames[2] = {"spindle_temp", "humidity"};
+  const auto rows = read_all(
+      "humidity,x,y,z,rx,ry,rz,time,spindle_temp,note\n"
+      "0.45,1,2,3,0,0,0,12.5,31.25,a\n"
+      "0.5,1,2,3,0,0,0,13,warm,b\n"  // an input that is not a number
+      "0.55,1,2,3,0,0,0,,30,c\n",    // an empty time
+      kNames, 2);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_TRUE(rows[0].point.valid);
+  EXPECT_EQ(rows[0].point.time, 12.5);
+  EXPECT_EQ(rows[0].point.inputs[0], 31.25);
+  EXPECT_EQ(rows[0].point.inputs[1], 0.45);
+  EXPECT_EQ(rows[0].point.inputs[2], 0.0);
+  EXPECT_FALSE(rows[1].point.valid);
+  EXPECT_FALSE(rows[2].point.valid);
+  // Without time, 0; a named input the file lacks is a bad header.
+  const auto plain = read_all("x,y,z,rx,ry,rz,spindle_temp\n1,2,3,0,0,0,30\n", kNames, 1);
+  ASSERT_EQ(plain.size(), 1u);
+  EXPECT_TRUE(plain[0].point.valid);
+  EXPECT_EQ(plain[0].point.time, 0.0);
+  EXPECT_EQ(plain[0].point.inputs[0], 30.0);
+  EXPECT_EQ(read_all("x,y,z,rx,ry,rz,spindle_temp\n1,2,3,0,0,0,30\n", kNames, 2)[0].result, LR::BadHeader);
+  // A reader told of no inputs ignores such columns.
+  const auto none = read_all("x,y,z,rx,ry,rz,spindle_temp\n1,2,3,0,0,0,oops\n");
+  EXPECT_TRUE(none[0].point.valid);
 }
 
 TEST(PortCsv, AHeaderWithoutThePoseColumnsIsRejected) {

@@ -40,8 +40,8 @@ int run(int argc, char** argv) {
   simulate->add_option("--out", sim.out, "measurement CSV to write")->required();
   simulate->add_option("--errors", sim.errors, "parameter errors CSV (name,value)");
   simulate->add_option("--effect", sim.effects,
-                       "NAME:PARAM=VALUE, a physical effect of the actual machine (repeatable; e.g. scale:s1=1e-4, "
-                       "thermal:c=1.2e-5; 'kincal effects' lists them)");
+                       "NAME:PARAM=VALUE[,PARAM=VALUE...], a physical effect of the actual machine (repeatable; e.g. "
+                       "scale:s1=1e-4,s2=-5e-5, thermal:c=1.2e-5; 'kincal effects' lists them)");
   simulate->add_option("--targets", sim.targets,
                        "measure laser-tracker targets instead of poses (6-UPS) or the gauge (hybrid): 'robot' (the "
                        "description's `targets`) or the true positions on the platform / tool 'x,y,z[;x,y,z[;x,y,z]]', "

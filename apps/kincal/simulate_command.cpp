@@ -27,8 +27,8 @@ int run_simulate(const SimulateArgs& a) {
   if (!a.errors.empty()) errors = ki::read_parameters(a.errors, nominal, warn);
   ki::EffectValues effects;
   for (const std::string& e : a.effects) {
-    const ki::EffectSetting setting = ki::parse_effect_option(e);
-    effects.set(nominal, setting.effect, setting.parameter, setting.value);
+    for (const ki::EffectSetting& setting : ki::parse_effect_options(e))
+      effects.set(nominal, setting.effect, setting.parameter, setting.value);
   }
   const ki::Robot actual = ki::apply_parameters(nominal, errors);
 

@@ -8,9 +8,11 @@
 // when the calibration table fails its start-up check (docs/firmware.md).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "kincal/core/calibration_table.hpp"
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/core/machine_limits.hpp"
 
 static_assert(::kincal::kCalibrationTableVersion == 4,
@@ -963,6 +965,12 @@ static_assert(::kincal::table_crc(kNominalTable_float) == kNominalCrc_float,
               "Nominal table (float): CRC mismatch, the values were edited or corrupted; regenerate with kincal table");
 static_assert(::kincal::validate_table(kNominalTable_float, kLimits_float) == ::kincal::CompensationStatus::Ok,
               "Nominal table (float): fails validate_table (values, bounds, machine limits)");
+
+// --- formula effects (the robot description's `effects`; core/formula_effects.hpp)
+// The named inputs the NC stream must carry, in the machine's input order.
+inline constexpr int kFormulaInputCount = 0;
+inline constexpr const char* kFormulaInputNames[::kincal::kFormulaInputs] = {nullptr, nullptr, nullptr, nullptr};
+template <class Scalar> using Formulas = ::kincal::NoFormulaEffects;  // none
 
 // By scalar: calibration_table<double>() etc.
 template <class Scalar> struct Tables;

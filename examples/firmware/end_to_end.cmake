@@ -52,7 +52,13 @@ run(${TOOL} simulate --robot ${ROBOT} --poses ${POSES} --errors ${ERRORS} ${_eff
     --out ${DIR}/reached_uncompensated.csv)
 run(${TOOL} simulate --robot ${ROBOT} --poses ${_fw_joints} --errors ${ERRORS} ${_effect}
     --out ${DIR}/reached_firmware.csv)
-run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_uncompensated.csv --prefix ${HELD_OUT} --label "held-out rows, uncompensated"
+# HELD_OUT: an id prefix, or role:<role> for the rows the poses file gives that role.
+if(HELD_OUT MATCHES "^role:(.+)$")
+  set(_rows --role ${CMAKE_MATCH_1} --poses ${POSES})
+else()
+  set(_rows --prefix ${HELD_OUT})
+endif()
+run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_uncompensated.csv ${_rows} --label "held-out rows, uncompensated"
     --min-rms-um ${MIN_RMS_UM})
-run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_firmware.csv --prefix ${HELD_OUT} --label "held-out rows, firmware commands"
+run(${PYTHON} ${_here}/pose_errors.py ${DIR}/reached_firmware.csv ${_rows} --label "held-out rows, firmware commands"
     --max-rms-um ${MAX_RMS_UM})

@@ -52,7 +52,7 @@ int main() {
     while (*p == ' ') ++p;
     n = parse_count(p);
   }
-  const kincal::Compensator<Machine> comp(Tables::calibration(), Tables::limits());
+  const kincal::Compensator<Machine, kincal::generated::Formulas<Scalar>> comp(Tables::calibration(), Tables::limits());
   kincal::Vec6<Scalar> home;
   if (comp.home_command(home) != kincal::CompensationStatus::Ok) return 1;
   kincal::CompensatorState<Scalar> state = comp.start(home);

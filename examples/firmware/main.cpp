@@ -7,6 +7,8 @@
 //                 flash, CRC checked at compile time and again at start-up
 //   registers:    the drives' encoder-offset registers, emulated by a RAM block
 //                 (qemu has no encoder hardware; port/baremetal/ram_encoder_registers.hpp)
+//   formulas:     the robot description's formula effects, generated into the
+//                 same header as C++ templated on the scalar (docs/effects.md)
 //   NC stream:    nominal poses from a CSV file, joint commands to a CSV file,
 //                 through semihosting (port/baremetal/semihost_nc_stream.hpp)
 //   controller:   port/include/kincal/port/controller.hpp
@@ -41,9 +43,14 @@ namespace kp = kincal::port;
 using Scalar = KINCAL_EXAMPLE_SCALAR;
 using Tables = kincal::generated::Tables<Scalar>;
 using Machine = kincal::generated::Machine<Scalar>;
-using Stream = kp::baremetal::SemihostNcStream<Scalar>;
 using Registers = kp::baremetal::RamEncoderRegisters;
-using Controller = kp::Controller<Machine, Registers, Stream>;
+// The machine's formula effects (the generated header's; NoFormulaEffects
+// when the robot description has none): called directly by the compensator.
+using Formulas = kincal::generated::Formulas<Scalar>;
+// The poses file's time and named-input columns are read only for a machine
+// with formula effects (their parsing is not in a machine's image without).
+using Stream = kp::baremetal::SemihostNcStream<Scalar, Formulas::present>;
+using Controller = kp::Controller<Machine, Registers, Stream, Formulas>;
 
 // The drives' register file (a RAM block under qemu).
 volatile kp::baremetal::EncoderRegisterBlock g_drive_registers;
@@ -100,6 +107,8 @@ __attribute__((noinline)) bool open_files() {
     if (n >= 2) poses = args[1];
     if (n >= 3) joints = args[2];
   }
+  // The formulas' named inputs are required columns of the poses file.
+  g_stream.set_inputs(kincal::generated::kFormulaInputNames, kincal::generated::kFormulaInputCount);
   if (!g_stream.open(poses, joints)) {
     say("kincal firmware example: cannot open ", poses, " or ");
     say(joints, "\n");

@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Pose errors of a `kincal simulate` output (measured - commanded), per group.
 
-Usage: pose_errors.py SIMULATED.csv [--prefix L2-] [--label NAME]
-                      [--max-rms-um X] [--min-rms-um Y]
+Usage: pose_errors.py SIMULATED.csv [--prefix L2-] [--role test --poses POSES.csv]
+                      [--label NAME] [--max-rms-um X] [--min-rms-um Y]
 
 Position error |(mx, my, mz) - (x, y, z)| and orientation error (angle of
 R_measured * R_commanded^T, R = Rz(rz) Ry(ry) Rx(rx)) over the rows whose id
-starts with --prefix (all rows by default). Prints one line; exits 1 if the
+starts with --prefix (all rows by default) and, with --role, whose row in
+POSES.csv (the design, which has the `role` column) has that role. Prints one line; exits 1 if the
 RMS position error is above --max-rms-um or below --min-rms-um.
 """
 
@@ -33,15 +34,24 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("simulated")
     ap.add_argument("--prefix", default="")
+    ap.add_argument("--role")
+    ap.add_argument("--poses")
     ap.add_argument("--label", default="")
     ap.add_argument("--max-rms-um", type=float)
     ap.add_argument("--min-rms-um", type=float)
     a = ap.parse_args()
     with open(a.simulated, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(l for l in f if l.strip() and not l.startswith("#")))
+    wanted = None
+    if a.role:
+        with open(a.poses, newline="", encoding="utf-8") as f:
+            design = csv.DictReader(l for l in f if l.strip() and not l.startswith("#"))
+            wanted = {r["id"] for r in design if r.get("role") == a.role}
     dp, dth = [], []
     for r in rows:
         if not r["id"].startswith(a.prefix) or (r.get("status") or "ok") != "ok":
+            continue
+        if wanted is not None and r["id"] not in wanted:
             continue
         p = [float(r[c]) for c in ("x", "y", "z")]
         m = [float(r[c]) for c in ("mx", "my", "mz")]
@@ -49,7 +59,7 @@ def main():
         dth.append(angle(rot(*(float(r[c]) for c in ("mrx", "mry", "mrz"))),
                          rot(*(float(r[c]) for c in ("rx", "ry", "rz")))) * 1e6)
     if not dp:
-        print(f"pose_errors: no rows with prefix '{a.prefix}' in {a.simulated}")
+        print(f"pose_errors: no rows with prefix '{a.prefix}'{' and role ' + a.role if a.role else ''} in {a.simulated}")
         return 1
     rms = math.sqrt(sum(x * x for x in dp) / len(dp))
     print(f"pose_errors {a.label or a.simulated}: {len(dp)} nodes, position rms {rms:.3f} um, "

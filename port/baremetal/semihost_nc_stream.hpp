@@ -34,12 +34,22 @@ extern "C" {
 
 namespace kincal::port::baremetal {
 
-template <class Scalar>
-class SemihostNcStream : public NcStreamPort<SemihostNcStream<Scalar>, Scalar> {
+// `FormulaColumns`: the poses file's `time` and named-input columns are read
+// (a machine with formula effects; PoseCsvReader).
+template <class Scalar, bool FormulaColumns = false>
+class SemihostNcStream : public NcStreamPort<SemihostNcStream<Scalar, FormulaColumns>, Scalar> {
  public:
   // `scaling` must outlive the stream (a constant in flash, typically).
   SemihostNcStream(RamEncoderRegisters& drive_registers, const EncoderOffsetScaling<Scalar>& scaling)
       : registers_(drive_registers), scaling_(scaling) {}
+
+  // The named inputs of the machine's formula effects (required columns of
+  // the poses file; PoseCsvReader::set_inputs). Before open().
+  void set_inputs(const char* const* names, int count) {
+    if constexpr (FormulaColumns) reader_.set_inputs(names, count);
+    (void)names;
+    (void)count;
+  }
 
   // Opens both files; false if either cannot be opened (the output is
   // created or truncated) or the header cannot be written.
@@ -85,8 +95,8 @@ class SemihostNcStream : public NcStreamPort<SemihostNcStream<Scalar>, Scalar> {
         reader_.malformed_row(point, id);
       } else {
         const auto r = reader_.feed(line_, size, point, id);
-        if (r == PoseCsvReader<Scalar>::LineResult::Skipped) continue;
-        if (r == PoseCsvReader<Scalar>::LineResult::BadHeader) return fail_header();
+        if (r == PoseCsvReader<Scalar, FormulaColumns>::LineResult::Skipped) continue;
+        if (r == PoseCsvReader<Scalar, FormulaColumns>::LineResult::BadHeader) return fail_header();
       }
       remember(point, id);
       return point.valid ? PortStatus::Ok : PortStatus::Malformed;
@@ -184,7 +194,7 @@ class SemihostNcStream : public NcStreamPort<SemihostNcStream<Scalar>, Scalar> {
 
   RamEncoderRegisters& registers_;
   const EncoderOffsetScaling<Scalar>& scaling_;
-  PoseCsvReader<Scalar> reader_;
+  PoseCsvReader<Scalar, FormulaColumns> reader_;
   int in_ = -1, out_ = -1;
   char chunk_[kChunk];
   std::size_t chunk_size_ = 0, chunk_pos_ = 0;

@@ -102,4 +102,23 @@ EffectSetting parse_effect_option(const std::string& text) {
   return e;
 }
 
+std::vector<EffectSetting> parse_effect_options(const std::string& text) {
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos) return {parse_effect_option(text)};  // its error message
+  std::vector<EffectSetting> out;
+  for (std::size_t b = colon + 1;;) {
+    const std::size_t e = text.find(',', b);
+    const std::string part = text.substr(b, e == std::string::npos ? std::string::npos : e - b);
+    try {
+      out.push_back(parse_effect_option(text.substr(0, colon + 1) + part));
+    } catch (const InputError& err) {
+      throw InputError("--effect '" + text.substr(0, 60) + "': '" + part.substr(0, 40) +
+                       "' is not PARAM=VALUE with a finite number");
+    }
+    if (e == std::string::npos) break;
+    b = e + 1;
+  }
+  return out;
+}
+
 }  // namespace kincal::identify

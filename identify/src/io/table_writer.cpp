@@ -189,6 +189,68 @@ std::string comment_safe(std::string s) {
   return s;
 }
 
+// The machine's formula effects (robot description key `effects`) as C++:
+// one function per effect (FormulaEffect::cpp_function, templated on the
+// scalar) and the policy Formulas<Scalar> that Compensator<Machine,
+// Formulas> and port::Controller call directly (core/formula_effects.hpp):
+// no function pointer, so the firmware's stack stays statically bounded. Every
+// formula of the description, at the table's numbers (the user slot), as
+// `kincal compensate` evaluates them (HostFormulaEffects).
+void emit_formulas(std::ostream& out, const Robot& robot) {
+  out << "// --- formula effects (the robot description's `effects`; core/formula_effects.hpp)\n";
+  const auto& effects = robot.formula_effects;
+  out << "// The named inputs the NC stream must carry, in the machine's input order.\n"
+      << "inline constexpr int kFormulaInputCount = " << robot.formula_inputs.size() << ";\n"
+      << "inline constexpr const char* kFormulaInputNames[::kincal::kFormulaInputs] = {";
+  for (int i = 0; i < kFormulaInputs; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    out << (i ? ", " : "") << (k < robot.formula_inputs.size() ? literal(robot.formula_inputs[k]) : "nullptr");
+  }
+  out << "};\n";
+  if (effects.empty()) {
+    out << "template <class Scalar> using Formulas = ::kincal::NoFormulaEffects;  // none\n\n";
+    return;
+  }
+  out << "\n";
+  for (const auto& c : effects) out << c->formula().cpp_function(c->formula().cpp_function_name()) << "\n";
+  bool pose = false;
+  for (const auto& c : effects) pose = pose || c->formula().kind() == FormulaKind::Pose;
+  const auto members = [&](FormulaKind kind, const std::string& target) {
+    for (const auto& c : effects) {
+      const FormulaEffect& f = c->formula();
+      if (f.kind() != kind) continue;
+      out << "    {  // " << f.name() << ": numbers " << c->offset() << ".." << c->offset() + int(f.parameter_names().size()) - 1
+          << " of the user slot\n"
+          << "      Scalar v[" << f.output_count() << "];\n"
+          << "      " << f.cpp_function_name() << "<Scalar>(params + " << c->offset() << ", vars, v);\n";
+      for (int o = 0; o < f.output_count(); ++o) {
+        const int index = kind == FormulaKind::Joint ? f.joints()[std::size_t(o)] - 1 : o;
+        out << "      " << target << "[" << index << "] += v[" << o << "];\n";
+      }
+      out << "    }\n";
+    }
+  };
+  out << "template <class Scalar> struct Formulas {\n"
+      << "  static constexpr bool present = true;\n"
+      << "  void add_joint_error(const Scalar* params, const Scalar* vars, Scalar* dq) const {\n"
+      << "    (void)params; (void)vars; (void)dq;\n";
+  members(FormulaKind::Joint, "dq");
+  out << "  }\n"
+      << "  void add_pose_twist(const Scalar* params, const Scalar* vars, Scalar* twist) const {\n"
+      << "    (void)params; (void)vars; (void)twist;\n";
+  members(FormulaKind::Pose, "twist");
+  out << "  }\n"
+      << "  bool has_pose() const { return " << (pose ? "true" : "false") << "; }\n"
+      << "  int input_count() const { return kFormulaInputCount; }\n"
+      << "  // The description's payload (N; mm, in the pose's body frame): the static joint loads `load`.\n"
+      << "  Scalar payload_weight() const { return Scalar(" << number(robot.payload_weight) << "); }\n"
+      << "  ::kincal::Vec3<Scalar> payload_com() const {\n"
+      << "    return ::kincal::Vec3<Scalar>(Scalar(" << number(robot.payload_com.x()) << "), Scalar("
+      << number(robot.payload_com.y()) << "), Scalar(" << number(robot.payload_com.z()) << "));\n"
+      << "  }\n"
+      << "};\n\n";
+}
+
 template <class Machine>
 std::string header_for(const CalibrationModel& model, const CalibrationTable<Machine>& table,
                        const std::string& model_name) {
@@ -233,8 +295,10 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "// `kincal compensate` runs on for this model; the nominal table is the firmware's fallback\n"
       << "// when the calibration table fails its start-up check (docs/firmware.md).\n"
       << "#pragma once\n\n"
+      << "#include <cmath>\n"
       << "#include <cstdint>\n\n"
       << "#include \"kincal/core/calibration_table.hpp\"\n"
+      << "#include \"kincal/core/formula_effects.hpp\"\n"
       << "#include \"kincal/core/machine_limits.hpp\"\n\n"
       << "static_assert(::kincal::kCalibrationTableVersion == " << kCalibrationTableVersion
       << ",\n              \"generated for calibration table format version " << kCalibrationTableVersion
@@ -255,6 +319,7 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
   emit_table(out, nominal, "Nominal", "double", names);
   emit_table(out, table_f, "Calibration", "float", names);
   emit_table(out, nominal_f, "Nominal", "float", names);
+  emit_formulas(out, model.nominal);
   out << "// By scalar: calibration_table<double>() etc.\n"
       << "template <class Scalar> struct Tables;\n"
       << "template <> struct Tables<double> {\n"
@@ -274,15 +339,6 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
 }  // namespace
 
 std::string calibration_table_header(const CalibrationModel& model, const std::string& model_name) {
-  // Formula effects reach the firmware as generated C++ (issue #32): not
-  // written yet, so a model with one is refused rather than given a table
-  // whose numbers the firmware has no code for.
-  for (const auto& [name, values] : model.effects.values)
-    for (const auto& f : model.nominal.formula_effects)
-      if (f->name() == name)
-        throw InputError(model_name, 0, 0,
-                         "the model's formula effect '" + name +
-                             "' is not written into the firmware header yet (kincal compensate applies it on the host)");
   const AnyCalibrationTable t = calibration_table(model);
   return std::visit([&](const auto& table) { return header_for(model, table, model_name); }, t);
 }

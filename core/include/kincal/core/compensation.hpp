@@ -514,9 +514,16 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
       if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
       if constexpr (Formulas::present) {
         if (payload_load != nullptr) {
-          const Vec3<Scalar> F = formulas_.payload_weight() * effects_.load_direction;
+          // The payload's wrench at the platform origin: force F = w·g and
+          // moment r × F, r the centre of mass in the base frame. Written out
+          // by component: Eigen's vectorized cross of two float Vec3 reads 16
+          // bytes of a 12-byte vector (GCC 12's -Warray-bounds on x86).
+          const Scalar w = formulas_.payload_weight();
+          const Vec3<Scalar> r = pose.R * formulas_.payload_com();
+          const Vec3<Scalar>& g = effects_.load_direction;
           Vec6<Scalar> wrench;
-          wrench << F, Vec3<Scalar>(pose.R * formulas_.payload_com()).cross(F);
+          wrench << w * g(0), w * g(1), w * g(2), w * (r(1) * g(2) - r(2) * g(1)), w * (r(2) * g(0) - r(0) * g(2)),
+              w * (r(0) * g(1) - r(1) * g(0));
           if (!static_load_of_wrench(J, wrench, *payload_load)) return CS::Singular;
         }
       }

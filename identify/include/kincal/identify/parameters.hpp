@@ -57,5 +57,8 @@ struct EffectSetting {
   double value = 0;
 };
 EffectSetting parse_effect_option(const std::string& text);
+// `--effect NAME:PARAM=VALUE[,PARAM=VALUE...]`: several numbers of one
+// effect in one option (leg_thermal:a1=1.5e-5,a2=2.5e-5).
+std::vector<EffectSetting> parse_effect_options(const std::string& text);
 
 }  // namespace kincal::identify

@@ -5,6 +5,10 @@
 //                one machine family per image, so nothing of the other is linked
 //     Registers  an EncoderOffsetPort backend (encoder_registers.hpp)
 //     Stream     an NcStreamPort backend (nc_stream.hpp)
+//     Formulas   the machine's formula effects (core/formula_effects.hpp):
+//                the generated header's Formulas<Scalar>, called directly;
+//                none by default. The stream then carries each point's
+//                time and named inputs (NcInput::time, ::inputs).
 //
 // Start-up (constructor + start()):
 //   1. the calibration table is checked (validate_table against the machine
@@ -127,7 +131,7 @@ enum class Cycle : std::uint8_t {
   NoSafeHold,     // no verified command to hold (StartReport::hold): nothing taken, nothing sent
 };
 
-template <class Machine, class Registers, class Stream> class Controller {
+template <class Machine, class Registers, class Stream, class Formulas = NoFormulaEffects> class Controller {
  public:
   using Scalar = typename Machine::Scalar;
   using Table = CalibrationTable<Machine>;
@@ -143,7 +147,7 @@ template <class Machine, class Registers, class Stream> class Controller {
         scaling_(config.scaling),
         register_attempts_(config.register_attempts),
         report_(check_tables(calibration, nominal, limits)),
-        compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal, limits) {
+        compensator_(report_.table == CompensationStatus::Ok ? calibration : nominal, limits, Formulas()) {
     counters_.table_failures =
         (report_.table != CompensationStatus::Ok ? 1u : 0u) + (report_.fallback != CompensationStatus::Ok ? 1u : 0u);
     initial_ = config.initial_command;
@@ -221,7 +225,7 @@ template <class Machine, class Registers, class Stream> class Controller {
   const StartReport& report() const { return report_; }
   const ControllerCounters& counters() const { return counters_; }
   const CompensatorState<Scalar>& state() const { return state_; }
-  const Compensator<Machine>& compensator() const { return compensator_; }
+  const Compensator<Machine, Formulas>& compensator() const { return compensator_; }
   // The register offsets in joint units, as read back (the drive frame's shift).
   const Vec6<Scalar>& drive_offset() const { return drive_offset_; }
 
@@ -293,6 +297,10 @@ template <class Machine, class Registers, class Stream> class Controller {
       p.direction = nullptr;  // backlash directions from the command sequence
       p.temperature = in.temperature;
       p.has_temperature = in.has_temperature;
+      if constexpr (Formulas::present) {
+        p.time = in.time;
+        p.inputs = in.inputs;  // the controller's own input_: valid for the call
+      }
       if (malformed || !in.valid) {
         // An unparsable record is an invalid input like a NaN: the
         // compensator counts it and holds.
@@ -381,7 +389,7 @@ template <class Machine, class Registers, class Stream> class Controller {
   int register_attempts_;
   StartReport report_;
   ControllerCounters counters_;
-  Compensator<Machine> compensator_;
+  Compensator<Machine, Formulas> compensator_;
   CompensatorState<Scalar> state_;
   Vec6<Scalar> drive_offset_ = Vec6<Scalar>::Zero();
   Vec6<Scalar> initial_ = Vec6<Scalar>::Zero();

@@ -11,6 +11,9 @@
 //        seq                   optional sequence number; default: 1, 2, 3, …
 //                              in row order
 //        temp                  optional structure temperature, °C
+//        time                  optional time stamp, s (formula effects)
+//        the machine's named   required when set_inputs() named them (the
+//        formula inputs        generated header's kFormulaInputNames)
 //      other columns are ignored. A row that cannot be parsed still becomes
 //      a point (valid = false) with its sequence number, so the controller
 //      answers it with a status instead of losing it.
@@ -91,13 +94,25 @@ class CsvFieldCursor {
   bool done_ = false, bad_ = false;
 };
 
-template <class Scalar> class PoseCsvReader {
+// `FormulaColumns`: read `time` and the named inputs (set_inputs) for a
+// machine with formula effects; without, those columns are ignored like any
+// other and their code is not in the image (the firmware's flash bar).
+template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
  public:
   enum class LineResult : std::uint8_t {
     Skipped,      // comment, blank line or the header: nothing to deliver
     Point,        // `point` (and `id`) written; point.valid says whether it parsed
     BadHeader,    // the header lacks a required column (or has too many / a bad quote)
   };
+
+  // The named inputs of the machine's formula effects, in its input order
+  // (at most kFormulaInputs; `names` must outlive the reader): each is a
+  // required column. Call before the header is read.
+  void set_inputs(const char* const* names, int count) {
+    static_assert(FormulaColumns, "a reader without formula columns reads no inputs");
+    input_names_ = names;
+    input_count_ = count < 0 ? 0 : (count > kFormulaInputs ? kFormulaInputs : count);
+  }
 
   // `line` (without its line end) may be modified (fields are unquoted in place).
   LineResult feed(char* line, std::size_t size, NcInput<Scalar>& point, CsvId& id) {
@@ -152,6 +167,24 @@ template <class Scalar> class PoseCsvReader {
         }
         continue;
       }
+      if constexpr (FormulaColumns) {
+        if (c == time_col_) {
+          ++seen;
+          if (parse_decimal(b, e, v))
+            point.time = Scalar(v);
+          else
+            ok = false;
+          continue;
+        }
+        for (int k = 0; k < input_count_; ++k) {
+          if (c != input_col_[k]) continue;
+          ++seen;
+          if (parse_decimal(b, e, v))
+            point.inputs[k] = Scalar(v);
+          else
+            ok = false;
+        }
+      }
       for (int k = 0; k < 6; ++k) {
         if (c != pose_col_[k]) continue;
         ++seen;
@@ -163,7 +196,7 @@ template <class Scalar> class PoseCsvReader {
     }
     if (!seq_ok) point.sequence = last_sequence_ + 1;  // keep the count going
     last_sequence_ = point.sequence;
-    const int wanted = 6 + (seq_col_ >= 0 ? 1 : 0) + (temp_col_ >= 0 ? 1 : 0);
+    const int wanted = 6 + (seq_col_ >= 0 ? 1 : 0) + (temp_col_ >= 0 ? 1 : 0) + (time_col_ >= 0 ? 1 : 0) + input_count_;
     if (cursor.bad() || c != fields_ || seen != wanted || !seq_ok) ok = false;
     point.valid = ok;
     return LineResult::Point;
@@ -193,6 +226,7 @@ template <class Scalar> class PoseCsvReader {
   LineResult read_header(CsvFieldCursor& cursor) {
     static constexpr const char* kPose[6] = {"x", "y", "z", "rx", "ry", "rz"};
     for (int k = 0; k < 6; ++k) pose_col_[k] = -1;
+    for (int k = 0; k < kFormulaInputs; ++k) input_col_[k] = -1;
     char* b = nullptr;
     char* e = nullptr;
     int c = 0;
@@ -202,10 +236,17 @@ template <class Scalar> class PoseCsvReader {
       if (is(b, e, "id")) id_col_ = c;
       if (is(b, e, "seq")) seq_col_ = c;
       if (is(b, e, "temp")) temp_col_ = c;
+      if constexpr (FormulaColumns) {
+        if (is(b, e, "time")) time_col_ = c;
+        for (int k = 0; k < input_count_; ++k)
+          if (is(b, e, input_names_[k])) input_col_[k] = c;
+      }
     }
     if (cursor.bad()) return LineResult::BadHeader;
     for (int k = 0; k < 6; ++k)
       if (pose_col_[k] < 0) return LineResult::BadHeader;
+    for (int k = 0; k < input_count_; ++k)
+      if (input_col_[k] < 0) return LineResult::BadHeader;
     fields_ = c;
     have_header_ = true;
     return LineResult::Skipped;
@@ -215,7 +256,10 @@ template <class Scalar> class PoseCsvReader {
   bool have_header_ = false;
   int fields_ = 0;
   int pose_col_[6] = {-1, -1, -1, -1, -1, -1};
-  int id_col_ = -1, seq_col_ = -1, temp_col_ = -1;
+  int id_col_ = -1, seq_col_ = -1, temp_col_ = -1, time_col_ = -1;
+  const char* const* input_names_ = nullptr;
+  int input_count_ = 0;
+  int input_col_[kFormulaInputs] = {};  // set by read_header
   std::uint32_t rows_ = 0;
   std::uint32_t last_sequence_ = 0;
 };

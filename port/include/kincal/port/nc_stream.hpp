@@ -28,6 +28,7 @@
 
 #include "kincal/core/scalar.hpp"
 #include "kincal/core/compensation_status.hpp"
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/port/port_status.hpp"
 
 namespace kincal::port {
@@ -39,6 +40,11 @@ template <class Scalar> struct NcInput {
   Vec6<Scalar> pose = Vec6<Scalar>::Zero();
   Scalar temperature = Scalar(20);  // °C, meaningful when has_temperature
   bool has_temperature = false;
+  // For the machine's formula effects (core/formula_effects.hpp): the time
+  // stamp, s (0 when the stream has none), and the named inputs in the
+  // machine's input order (the generated header's kFormulaInputNames).
+  Scalar time = Scalar(0);
+  Scalar inputs[kFormulaInputs] = {};
   bool valid = true;  // false: the record was malformed; pose is not usable
   // How often the producer found the input queue full (and kept the point to
   // retry) since the previous point was taken: the controller counts these.
