@@ -132,7 +132,7 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
     if (!have_header_) return read_header(cursor);
 
     ++rows_;
-    point = NcInput<Scalar>();
+    reset(point);
     id = CsvId();
     point.sequence = rows_;  // default; replaced by a seq column
     bool ok = true, seq_ok = seq_col_ < 0;
@@ -196,7 +196,8 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
     }
     if (!seq_ok) point.sequence = last_sequence_ + 1;  // keep the count going
     last_sequence_ = point.sequence;
-    const int wanted = 6 + (seq_col_ >= 0 ? 1 : 0) + (temp_col_ >= 0 ? 1 : 0) + (time_col_ >= 0 ? 1 : 0) + input_count_;
+    int wanted = 6 + (seq_col_ >= 0 ? 1 : 0) + (temp_col_ >= 0 ? 1 : 0);
+    if constexpr (FormulaColumns) wanted += (time_col_ >= 0 ? 1 : 0) + input_count_;
     if (cursor.bad() || c != fields_ || seen != wanted || !seq_ok) ok = false;
     point.valid = ok;
     return LineResult::Point;
@@ -206,7 +207,7 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
   // still a point, flagged, with the next sequence number.
   void malformed_row(NcInput<Scalar>& point, CsvId& id) {
     ++rows_;
-    point = NcInput<Scalar>();
+    reset(point);
     id = CsvId();
     point.sequence = seq_col_ >= 0 ? last_sequence_ + 1 : rows_;
     last_sequence_ = point.sequence;
@@ -214,6 +215,22 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
   }
 
   bool have_header() const { return have_header_; }
+
+  // A fresh point: only the fields this reader writes (without formula
+  // columns, time and inputs are not the controller's to read; leaving
+  // them saves the firmware the stores).
+  static void reset(NcInput<Scalar>& p) {
+    p.sequence = 0;
+    p.pose.setZero();
+    p.temperature = Scalar(20);
+    p.has_temperature = false;
+    p.valid = true;
+    p.producer_overruns = 0;
+    if constexpr (FormulaColumns) {
+      p.time = Scalar(0);
+      for (Scalar& v : p.inputs) v = Scalar(0);
+    }
+  }
   std::uint32_t rows() const { return rows_; }
 
  private:
@@ -226,7 +243,8 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
   LineResult read_header(CsvFieldCursor& cursor) {
     static constexpr const char* kPose[6] = {"x", "y", "z", "rx", "ry", "rz"};
     for (int k = 0; k < 6; ++k) pose_col_[k] = -1;
-    for (int k = 0; k < kFormulaInputs; ++k) input_col_[k] = -1;
+    if constexpr (FormulaColumns)
+      for (int k = 0; k < kFormulaInputs; ++k) input_col_[k] = -1;
     char* b = nullptr;
     char* e = nullptr;
     int c = 0;
@@ -245,8 +263,9 @@ template <class Scalar, bool FormulaColumns = true> class PoseCsvReader {
     if (cursor.bad()) return LineResult::BadHeader;
     for (int k = 0; k < 6; ++k)
       if (pose_col_[k] < 0) return LineResult::BadHeader;
-    for (int k = 0; k < input_count_; ++k)
-      if (input_col_[k] < 0) return LineResult::BadHeader;
+    if constexpr (FormulaColumns)
+      for (int k = 0; k < input_count_; ++k)
+        if (input_col_[k] < 0) return LineResult::BadHeader;
     fields_ = c;
     have_header_ = true;
     return LineResult::Skipped;
