@@ -77,7 +77,10 @@ sanitize_skip+='|EachPhysicalGroupIsAbsorbedAndCompensated|IndependentDiagnosis'
 export LSAN_OPTIONS="suppressions=$PWD/host_tests/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 
 mkdir -p build
+# Each stage's wall time, printed at the end (CI's budget: docs/benchmarks.md "Build time (CI)").
+timings=()
 for stage in "${stages[@]}"; do
+  stage_start=$SECONDS
   case $stage in
     host)     run_stage host -DCMAKE_BUILD_TYPE=Release ;;
     sanitize) ctest_args=(-E "$sanitize_skip")
@@ -99,5 +102,7 @@ for stage in "${stages[@]}"; do
               python3 host_tests/linuxcnc/check_export.py --kincal build/host/apps/kincal --work build/linuxcnc ;;
     *) echo "unknown stage '$stage' (host, sanitize, fuzz, m7, m4f, linuxcnc)" >&2; exit 2 ;;
   esac
+  timings+=("$stage $((SECONDS - stage_start)) s")
+  echo "=== $stage: done in $((SECONDS - stage_start)) s"
 done
-echo "=== all stages passed: ${stages[*]}"
+echo "=== all stages passed: ${stages[*]} (${SECONDS} s: $(IFS=,; echo "${timings[*]}" | sed 's/,/, /g'))"
