@@ -114,6 +114,11 @@ double compare(const ki::CompensatedStream& host, const std::vector<std::pair<Co
 
 TEST(GeneratedFormulaTable, TheHeadersFormulasCompensateLikeTheHost) {
   static_assert(kincal::generated::Formulas<double>::present, "the model has formula effects");
+  // Every compile-time path on (the sag reads x, y and is a twist; the
+  // clearance reads load; spindle an input): the paths off are the firmware
+  // end-to-end chains' (leg_thermal reads only q and temp).
+  using F = kincal::generated::Formulas<double>;
+  static_assert(F::pose_twist && F::reads_pose && F::reads_load && F::reads_stream, "what the formulas read");
   static_assert(kincal::generated::kFormulaInputCount == 1, "one named input");
   EXPECT_STREQ(kincal::generated::kFormulaInputNames[0], "spindle_temp");
   const ki::CalibrationModel model = ki::read_model_file(KINCAL_FORMULA_MODEL);

@@ -48,8 +48,8 @@ using Registers = kp::baremetal::RamEncoderRegisters;
 // when the robot description has none): called directly by the compensator.
 using Formulas = kincal::generated::Formulas<Scalar>;
 // The poses file's time and named-input columns are read only for a machine
-// with formula effects (their parsing is not in a machine's image without).
-using Stream = kp::baremetal::SemihostNcStream<Scalar, Formulas::present>;
+// whose formulas read them (their parsing is not in the image otherwise).
+using Stream = kp::baremetal::SemihostNcStream<Scalar, Formulas::reads_stream>;
 using Controller = kp::Controller<Machine, Registers, Stream, Formulas>;
 
 // The drives' register file (a RAM block under qemu).

@@ -147,7 +147,7 @@ struct FormulaEffect::Impl {
   std::size_t value_ops = 0;                     // ops [0, value_ops) compute the values
   std::vector<int> value_slot;                   // per component (1 or 6)
   std::vector<std::vector<int>> derivative_slot; // [component][base…, shared…]: slot, −1 = identically 0
-  bool temperature = false, time = false, direction = false, load = false;
+  bool temperature = false, time = false, direction = false, load = false, pose_variables = false;
   std::vector<bool> input_used;
 
   [[noreturn]] void fail(const std::string& key, const std::string& message) const {
@@ -838,6 +838,7 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
       if (at == lay.time()) m.time = true;
       if (at >= lay.dir(1) && at <= lay.dir(N)) m.direction = true;
       if (at >= lay.load(1) && at <= lay.load(N)) m.load = true;
+      if (at >= lay.pose(0) && at <= lay.pose(5)) m.pose_variables = true;
     }
   }
 
@@ -891,6 +892,12 @@ bool FormulaEffect::uses_temperature() const { return impl_->temperature; }
 bool FormulaEffect::uses_time() const { return impl_->time; }
 bool FormulaEffect::uses_direction() const { return impl_->direction; }
 bool FormulaEffect::uses_load() const { return impl_->load; }
+bool FormulaEffect::uses_pose() const { return impl_->pose_variables; }
+bool FormulaEffect::uses_inputs() const {
+  for (const bool used : impl_->input_used)
+    if (used) return true;
+  return false;
+}
 std::vector<std::string> FormulaEffect::required_columns() const {
   std::vector<std::string> out;
   if (impl_->temperature) out.emplace_back("temp");

@@ -372,15 +372,17 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
     Vec6<Scalar> nominal_q, ideal;
     FormulaVariables<Scalar> vars;
     if constexpr (Formulas::present) {
-      if (!is_finite(point.time)) return CS::InvalidInput;
       vars.v[FormulaSlot::temp] = temperature;
-      vars.v[FormulaSlot::time] = point.time;
-      vars.set_pose(point.pose);
-      const int n = formulas_.input_count();
-      if (n > 0 && point.inputs == nullptr) return CS::InvalidInput;
-      for (int i = 0; i < n; ++i) {
-        if (!is_finite(point.inputs[i])) return CS::InvalidInput;
-        vars.v[FormulaSlot::input + i] = point.inputs[i];
+      if constexpr (Formulas::reads_pose) vars.set_pose(point.pose);
+      if constexpr (Formulas::reads_stream) {  // the time stamp and the named inputs
+        if (!is_finite(point.time)) return CS::InvalidInput;
+        vars.v[FormulaSlot::time] = point.time;
+        const int n = formulas_.input_count();
+        if (n > 0 && point.inputs == nullptr) return CS::InvalidInput;
+        for (int i = 0; i < n; ++i) {
+          if (!is_finite(point.inputs[i])) return CS::InvalidInput;
+          vars.v[FormulaSlot::input + i] = point.inputs[i];
+        }
       }
     }
     const CS st = geometry(point.pose, temperature, nominal_q, ideal, inputs.load, warm, vars);
@@ -442,20 +444,25 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
                               [[maybe_unused]] FormulaVariables<Scalar>& vars) const {
     Pose<Scalar> target;
     if constexpr (Formulas::present) {
+      // Only what the machine's formulas read is computed (the policy's
+      // compile-time flags: a generated policy knows; the host's says all).
       Vec6<Scalar> payload_load = Vec6<Scalar>::Zero();
-      const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target, &payload_load);
+      const CompensationStatus st =
+          prepare(pose, temperature, nominal_q, load, target, Formulas::reads_load ? &payload_load : nullptr);
       if (st != CompensationStatus::Ok) return st;
-      vars.set_loads(payload_load);
-      if (formulas_.has_pose()) {
-        vars.set_joints(nominal_q);
-        target = formula_pose_precorrect(pose, [&](const Pose<Scalar>& at, Vec6<Scalar>& twist) {
-          vars.set_pose(at);
-          twist.setZero();
-          formulas_.add_pose_twist(effects_.user.data(), vars.v, twist.data());
-        });
-        vars.set_pose(pose);
-        if (!target.finite()) return CompensationStatus::InvalidInput;
-        if (thermal_) target = thermal_precorrect(effects_, target, temperature);
+      if constexpr (Formulas::reads_load) vars.set_loads(payload_load);
+      if constexpr (Formulas::pose_twist) {
+        if (formulas_.has_pose()) {
+          vars.set_joints(nominal_q);
+          target = formula_pose_precorrect(pose, [&](const Pose<Scalar>& at, Vec6<Scalar>& twist) {
+            vars.set_pose(at);
+            twist.setZero();
+            formulas_.add_pose_twist(effects_.user.data(), vars.v, twist.data());
+          });
+          vars.set_pose(pose);
+          if (!target.finite()) return CompensationStatus::InvalidInput;
+          if (thermal_) target = thermal_precorrect(effects_, target, temperature);
+        }
       }
     } else {
       const CompensationStatus st = prepare(pose, temperature, nominal_q, load, target);
@@ -496,15 +503,15 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
 
   // At the nominal configuration of `pose`: q_nom, the singularity test, the
   // static load; then the pose handed to the IK (thermal pre-scaling).
-  // `payload_load` (formula effects): the static joint loads under the
-  // formulas' payload (its weight at its centre of mass; the hybrid's at the
-  // tool point). With it, a pose-kind formula's twist comes before the
-  // thermal pre-scaling, which geometry() then applies.
+  // `payload_load` (formula effects that read `load`): the static joint
+  // loads under the formulas' payload (its weight at its centre of mass; the
+  // hybrid's at the tool point). With a pose-kind formula, its twist comes
+  // before the thermal pre-scaling, which geometry() then applies.
   KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                                              Vec6<Scalar>& load, Pose<Scalar>& target,
                                              Vec6<Scalar>* payload_load = nullptr) const {
     using CS = CompensationStatus;
-    const bool thermal_here = thermal_ && !(payload_load != nullptr && formulas_.has_pose());
+    const bool thermal_here = thermal_ && !(Formulas::pose_twist && formulas_.has_pose());
     if constexpr (family == MachineFamily::Stewart6Ups) {
       // The nominal IK with its Jacobian: the singularity test of the NC point,
       // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
@@ -512,7 +519,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
       const Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
-      if constexpr (Formulas::present) {
+      if constexpr (Formulas::reads_load) {
         if (payload_load != nullptr) {
           // The payload's wrench at the platform origin: force F = w·g and
           // moment r × F, r the centre of mass in the base frame. Written out
@@ -543,7 +550,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
       s = hybrid_wrenches(model_.nominal, f, w);
       if (s != Status::Ok) return to_compensation_status(s);
       if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
-      if constexpr (Formulas::present) {
+      if constexpr (Formulas::reads_load) {
         // (the hybrid's payload acts at the tool point: identify refuses a
         // centre of mass elsewhere)
         if (payload_load != nullptr)

@@ -8,6 +8,11 @@
 //
 //   struct Formulas {
 //     static constexpr bool present;  // any formula effect at all
+//     // What the formulas may need, at compile time (false: not computed,
+//     // no code): a pose-kind effect, the pose variables x..rz, the static
+//     // loads `load`, the NC stream's time or named inputs. A generated
+//     // policy knows exactly; the host's says true and decides at run time.
+//     static constexpr bool pose_twist, reads_pose, reads_load, reads_stream;
 //     // Δq of every joint-kind effect, added to dq[0..5], at the variables
 //     // `vars` (FormulaVariables' layout) and the numbers `params`
 //     // (EffectParameters::user: the table's numbers of the formulas).
@@ -76,6 +81,7 @@ template <class S> struct FormulaVariables {
 // No formula effect (the default policy): nothing to evaluate, no code.
 struct NoFormulaEffects {
   static constexpr bool present = false;
+  static constexpr bool pose_twist = false, reads_pose = false, reads_load = false, reads_stream = false;
   template <class S> void add_joint_error(const S*, const S*, S*) const {}
   template <class S> void add_pose_twist(const S*, const S*, S*) const {}
   bool has_pose() const { return false; }

@@ -69,6 +69,8 @@ Pose<double> moved_by_twist(const Pose<double>& pose, const Vec6<double>& twist)
 class HostFormulaEffects {
  public:
   static constexpr bool present = true;
+  // Everything may be read: has_pose() and the formulas decide at run time.
+  static constexpr bool pose_twist = true, reads_pose = true, reads_load = true, reads_stream = true;
   explicit HostFormulaEffects(const Robot& robot) : robot_(&robot) {}
   void add_joint_error(const double* params, const double* vars, double* dq) const;
   void add_pose_twist(const double* params, const double* vars, double* twist) const;

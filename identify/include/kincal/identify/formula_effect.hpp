@@ -136,6 +136,8 @@ class FormulaEffect {
   bool uses_time() const;
   bool uses_direction() const;
   bool uses_load() const;
+  bool uses_pose() const;    // reads x, y, z, rx, ry or rz
+  bool uses_inputs() const;  // reads one of its named inputs
   // Measurement columns the data must carry ("temp", "time", the inputs;
   // directions and loads have defaults and are not listed).
   std::vector<std::string> required_columns() const;

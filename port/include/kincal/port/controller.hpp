@@ -297,7 +297,7 @@ template <class Machine, class Registers, class Stream, class Formulas = NoFormu
       p.direction = nullptr;  // backlash directions from the command sequence
       p.temperature = in.temperature;
       p.has_temperature = in.has_temperature;
-      if constexpr (Formulas::present) {
+      if constexpr (Formulas::reads_stream) {
         p.time = in.time;
         p.inputs = in.inputs;  // the controller's own input_: valid for the call
       }
