@@ -79,22 +79,13 @@ Diag diagnose(const std::string& robot, const std::string& data, const std::stri
 template <class Reach>
 double compensated_rms(const std::string& robot, const std::string& data, const std::string& tag,
                        const std::string& effect, const ind::Dataset& d, Reach reach) {
-  const std::string model = kDir + "/" + tag + "_model.json";
-  const kincal_test::ToolRun id = kincal_test::run_tool_in(
-      kDir, "identify --robot " + robot + " --data " + data + " --out " + model +
-                (effect.empty() ? "" : " --effects " + effect));
-  EXPECT_EQ(id.code, 0) << tag << ": " << id.err;
-  if (id.code != 0) return -1;
-  std::vector<const ind::DatasetRow*> test;
-  const std::string poses_path =
-      kincal_test::write_in(kDir, tag + "_test_poses.csv", ind::held_out_poses_csv(d, test));
-  const std::string joints = kDir + "/" + tag + "_joints.csv";
-  const kincal_test::ToolRun comp = kincal_test::run_tool_in(
-      kDir, "compensate --robot " + robot + " --model " + model + " --poses " + poses_path + " --out " + joints);
-  EXPECT_EQ(comp.code, 0) << tag << ": " << comp.err;
-  if (comp.code != 0) return -1;
+  const ind::IdentifyCompensate run = ind::identify_and_compensate(kDir, robot, data, tag, effect, d);
+  EXPECT_EQ(run.identify.code, 0) << tag << ": " << run.identify.err;
+  EXPECT_EQ(run.compensate.code, 0) << tag << ": " << run.compensate.err;
+  if (run.compensate.code != 0) return -1;
+  const std::vector<const ind::DatasetRow*>& test = run.test;
   ki::PoseTableOptions o;
-  const ki::PoseTable table = ki::read_pose_table(joints, o);
+  const ki::PoseTable table = ki::read_pose_table(run.joints, o);
   EXPECT_EQ(table.rows.size(), test.size()) << tag;
   double sum = 0;
   int n = 0;

@@ -97,25 +97,18 @@ struct Held {
 Held compensate(const std::string& data, const std::string& tag, const std::string& effects,
                 const ind::HybridSimulator& machine, const ind::Dataset& d, bool may_refuse = false) {
   Held h;
-  const std::string model = kDir + "/" + tag + "_model.json";
-  const kincal_test::ToolRun id = kincal_test::run_tool_in(
-      kDir, "identify --robot " + kRobot + " --data " + data + " --out " + model +
-                (effects.empty() ? "" : " --effects " + effects));
-  EXPECT_EQ(id.code, 0) << tag << ": " << id.err;
-  if (id.code != 0) return h;
-  std::vector<const ind::DatasetRow*> test;
-  const std::string poses_path =
-      kincal_test::write_in(kDir, tag + "_test_poses.csv", ind::held_out_poses_csv(d, test));
-  const std::string joints = kDir + "/" + tag + "_joints.csv";
-  const kincal_test::ToolRun comp = kincal_test::run_tool_in(
-      kDir, "compensate --robot " + kRobot + " --model " + model + " --poses " + poses_path + " --out " + joints);
+  const ind::IdentifyCompensate run = ind::identify_and_compensate(kDir, kRobot, data, tag, effects, d);
+  EXPECT_EQ(run.identify.code, 0) << tag << ": " << run.identify.err;
+  if (run.identify.code != 0) return h;
   if (!may_refuse) {
-    EXPECT_EQ(comp.code, 0) << tag << ": " << comp.err;
+    EXPECT_EQ(run.compensate.code, 0) << tag << ": " << run.compensate.err;
   }
-  if (comp.code != 0) {
+  if (run.compensate.code != 0) {
     h.rms_um = -1;  // refused
     return h;
   }
+  const std::vector<const ind::DatasetRow*>& test = run.test;
+  const std::string& joints = run.joints;
   kincal::identify::PoseTableOptions o;
   o.joint_count = 6;
   const kincal::identify::PoseTable table = kincal::identify::read_pose_table(joints, o);

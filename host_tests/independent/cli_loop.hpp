@@ -64,6 +64,30 @@ inline std::string held_out_poses_csv(const Dataset& d, std::vector<const Datase
   return poses.str();
 }
 
+
+// The loop's two commands in `dir`: `kincal identify` of `data` (with
+// `effects`; "" = the base only) into <tag>_model.json, then, if it
+// succeeded, `kincal compensate` of d's held-out rows into <tag>_joints.csv.
+struct IdentifyCompensate {
+  kincal_test::ToolRun identify, compensate;  // compensate.code stays -1 when identify failed
+  std::vector<const DatasetRow*> test;        // the held-out rows, in the joints file's order
+  std::string joints;
+};
+inline IdentifyCompensate identify_and_compensate(const std::string& dir, const std::string& robot,
+                                                  const std::string& data, const std::string& tag,
+                                                  const std::string& effects, const Dataset& d) {
+  IdentifyCompensate r;
+  const std::string model = dir + "/" + tag + "_model.json";
+  r.identify = kincal_test::run_tool_in(dir, "identify --robot " + robot + " --data " + data + " --out " + model +
+                                                 (effects.empty() ? "" : " --effects " + effects));
+  if (r.identify.code != 0) return r;
+  const std::string poses_path = kincal_test::write_in(dir, tag + "_test_poses.csv", held_out_poses_csv(d, r.test));
+  r.joints = dir + "/" + tag + "_joints.csv";
+  r.compensate = kincal_test::run_tool_in(
+      dir, "compensate --robot " + robot + " --model " + model + " --poses " + poses_path + " --out " + r.joints);
+  return r;
+}
+
 struct HeldOut {
   double position_um = 0;  // worst |reached − asked|, µm
   double rotation_urad = 0;
