@@ -109,6 +109,10 @@ $kincal identify --robot $formula_robot --data out/main_formula_measured.csv --e
 $kincal compensate --robot $formula_robot --model out/main_formula_model.json \
   --poses out/main_formula_test_poses.csv --out out/main_formula_joints.csv
 echo "   step 4, base + leg_thermal:      held-out pose error $(formula_error out/main_formula_joints.csv)"
+echo "   step 5, into the firmware: kincal table writes the formula as C++ the controller calls directly"
+$kincal table --model out/main_formula_model.json --out out/main_formula_calibration_table.hpp
+grep -E "^// dq_i = |^void kincal_formula_|reads_stream = " out/main_formula_calibration_table.hpp | sed 's/^ */     /'
+echo "     (out/main_formula_calibration_table.hpp; built and run under qemu: ctest -R end_to_end_formula in a firmware build)"
 echo "   (hidden: leg_thermal a1 = 1.5e-5, a2 = 2.5e-5 /C; report: out/main_formula_report.html)"
 
 echo
