@@ -111,7 +111,7 @@ std::vector<EffectSetting> parse_effect_options(const std::string& text) {
     const std::string part = text.substr(b, e == std::string::npos ? std::string::npos : e - b);
     try {
       out.push_back(parse_effect_option(text.substr(0, colon + 1) + part));
-    } catch (const InputError& err) {
+    } catch (const InputError&) {  // one message for the whole option, naming the bad part
       throw InputError("--effect '" + text.substr(0, 60) + "': '" + part.substr(0, 40) +
                        "' is not PARAM=VALUE with a finite number");
     }

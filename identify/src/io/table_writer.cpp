@@ -250,7 +250,7 @@ void emit_formulas(std::ostream& out, const Robot& robot) {
       << "    (void)params; (void)vars; (void)twist;\n";
   members(FormulaKind::Pose, "twist");
   out << "  }\n"
-      << "  bool has_pose() const { return " << (pose ? "true" : "false") << "; }\n"
+      << "  bool has_pose() const { return " << flag(pose) << "; }\n"
       << "  int input_count() const { return kFormulaInputCount; }\n"
       << "  // The description's payload (N; mm, in the pose's body frame): the static joint loads `load`.\n"
       << "  Scalar payload_weight() const { return Scalar(" << number(robot.payload_weight) << "); }\n"
