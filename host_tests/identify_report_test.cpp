@@ -82,6 +82,7 @@ Diagnosis synthetic(int layers, int per_side, bool with_test, bool with_covariat
   d.robot = "hybrid-seed000";
   d.data_file = "meas/hidden_scale.csv";
   d.family = "hybrid-3ups-up-3r";
+  d.revolute = {false, false, false, true, true, true};  // the hybrid's wrist (joints 4-6)
   d.noise_um = 5.0;
   d.noise_source = "given";
   d.verdict = "unexplained";
@@ -159,6 +160,24 @@ TEST(IdentifyReport, WellFormedSelfContained) {
   EXPECT_NE(html.find("no temp column"), std::string::npos);  // why_not shown
   EXPECT_NE(html.find(d.hotspots[0].where), std::string::npos);
   EXPECT_NE(html.find("x&gt;0,y&lt;0"), std::string::npos);  // hotspot 2, escaped
+}
+
+// The joints' units come from the robot (Diagnosis::revolute), not from the
+// family's name: a family named like none of ours with revolute motors shows
+// them in degrees, and the hybrid's name with all joints prismatic in mm.
+TEST(IdentifyReport, JointUnitsFollowTheRobotNotTheFamilyName) {
+  Diagnosis d = synthetic(2, 3, false, false);
+  d.family = "rus6";
+  d.revolute = {true, true, true, true, true, true};
+  std::string html = diagnosis_report_html(d);
+  EXPECT_NE(html.find("q1 (deg)"), std::string::npos);
+  EXPECT_NE(html.find("q6 (deg)"), std::string::npos);
+  EXPECT_EQ(html.find("q1 (mm)"), std::string::npos);
+  d.family = "hybrid-3ups-up-3r";
+  d.revolute = {};
+  html = diagnosis_report_html(d);
+  EXPECT_NE(html.find("q6 (mm)"), std::string::npos);
+  EXPECT_EQ(html.find("(deg)"), std::string::npos);
 }
 
 TEST(IdentifyReport, EscapesDataBorneText) {

@@ -443,6 +443,7 @@ void DiagnosisRun::check_inputs() {
   d.robot = robot.name;
   d.data_file = data.file;
   d.family = robot.family();
+  for (int i = 0; i < 6; ++i) d.revolute[std::size_t(i)] = robot.revolute(i);
   if (const std::string missing = family_of(robot).missing_measurement(robot, data); !missing.empty())
     throw InputError(data.file, 1, 0, missing);
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");

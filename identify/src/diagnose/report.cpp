@@ -40,7 +40,7 @@ double rms_per_coordinate(const std::vector<Vec3<double>>& r) {
 
 // Hybrid machines drive three prismatic and three revolute joints (q4..q6 in
 // rad); every 6-UPS joint is prismatic.
-bool revolute_joint(const Diagnosis& d, int i) { return d.family.find("hybrid") != std::string::npos && i >= 3; }
+bool revolute_joint(const Diagnosis& d, int i) { return d.revolute[std::size_t(i)]; }
 double joint_display(const Diagnosis& d, int i, double q) { return revolute_joint(d, i) ? q * (180.0 / kPi) : q; }
 const char* joint_unit(const Diagnosis& d, int i) { return revolute_joint(d, i) ? "deg" : "mm"; }
 const char* joint_residual_unit(const Diagnosis& d, int i) { return revolute_joint(d, i) ? "µrad" : "µm"; }

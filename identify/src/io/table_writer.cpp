@@ -95,11 +95,6 @@ std::string hex32(std::uint32_t v) {
   return buf;
 }
 
-// The MachineFamily enumerator and core's machine type of a family (they
-// differ: MachineFamily::Stewart6Ups, StewartMachine<S>).
-std::string family_name(MachineFamily f) { return f == MachineFamily::Hybrid ? "Hybrid" : "Stewart6Ups"; }
-std::string machine_type(MachineFamily f) { return f == MachineFamily::Hybrid ? "HybridMachine" : "StewartMachine"; }
-
 // The machine limits (core/machine_limits.hpp) as a constexpr aggregate.
 template <class Scalar>
 void emit_limits(std::ostream& out, const MachineLimits<Scalar>& l, const std::string& scalar) {
@@ -139,9 +134,9 @@ void emit_table(std::ostream& out, const CalibrationTable<Machine>& t, const std
   }
   out << "};\n";
   out << "inline constexpr std::uint32_t k" << name << "Crc_" << scalar << " = " << hex32(t.crc) << ";\n";
-  out << "inline constexpr ::kincal::CalibrationTable<::kincal::" << machine_type(Machine::family) << "<"
+  out << "inline constexpr ::kincal::CalibrationTable<::kincal::" << Machine::type_name << "<"
       << scalar << ">> k" << name << "Table_" << scalar << " =\n    ::kincal::table_from_values<::kincal::"
-      << machine_type(Machine::family) << "<" << scalar << ">>(k" << name << "Values_" << scalar << ", k" << name
+      << Machine::type_name << "<" << scalar << ">>(k" << name << "Values_" << scalar << ", k" << name
       << "Crc_" << scalar << ");\n";
   out << "static_assert(::kincal::table_crc(k" << name << "Table_" << scalar << ") == k" << name << "Crc_" << scalar
       << ",\n              \"" << name << " table (" << scalar
@@ -164,11 +159,7 @@ template <class Machine> CalibrationTable<Machine> nominal_of(const CalibrationT
   e.cyclic_cos.setZero();
   e.thermal = S(0);
   e.user.setZero();
-  if constexpr (Machine::family == MachineFamily::Hybrid) {
-    return nominal_table(to_core(calibrated.machine.nominal), calibrated.machine.up_split, e);
-  } else {
-    return nominal_table(to_core(calibrated.machine.nominal), e);
-  }
+  return nominal_table_of(calibrated.machine, e);
 }
 
 // A string literal for the banner and the constants (quotes and backslashes escaped).
@@ -264,7 +255,7 @@ void emit_formulas(std::ostream& out, const Robot& robot) {
 template <class Machine>
 std::string header_for(const CalibrationModel& model, const CalibrationTable<Machine>& table,
                        const std::string& model_name) {
-  using MachineF = std::conditional_t<Machine::family == MachineFamily::Hybrid, HybridMachine<float>, StewartMachine<float>>;
+  using MachineF = typename Machine::template Rebind<float>;
   const CalibrationTable<Machine> nominal = nominal_of(table);
   const CalibrationTable<MachineF> table_f = table_cast<float>(table);
   const CalibrationTable<MachineF> nominal_f = table_cast<float>(nominal);
@@ -291,7 +282,7 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
     const HybridErrorModel em(model.nominal.hybrid());
     for (const HybridErrorParameter& p : em.parameters()) names.push_back(p.name + " " + p.unit());
   }
-  const std::string fam = family_name(Machine::family);
+  const std::string fam = Machine::family_name;
   std::ostringstream out;
   out << "// Generated from " << comment_safe(model_name) << " by kincal " << kVersion
       << " (`kincal table`). Do not edit:\n"
@@ -319,7 +310,7 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "inline constexpr const char* kGenerator = " << literal(std::string("kincal ") + kVersion) << ";\n"
       << "inline constexpr ::kincal::MachineFamily kFamily = ::kincal::MachineFamily::" << fam << ";\n"
       << "inline constexpr std::uint32_t kFormatVersion = " << kCalibrationTableVersion << ";\n"
-      << "template <class Scalar> using Machine = ::kincal::" << machine_type(Machine::family) << "<Scalar>;\n\n"
+      << "template <class Scalar> using Machine = ::kincal::" << Machine::type_name << "<Scalar>;\n\n"
       << "// The machine limits (core/machine_limits.hpp), from the nominal robot description,\n"
       << "// never from identified values: the controller checks the tables against them. A port\n"
       << "// may replace them with limits of its own (its drives' travel).\n";

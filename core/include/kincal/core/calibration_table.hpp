@@ -191,11 +191,23 @@ template <class Scalar> struct TableBounds {
 
 // ---- machines ----------------------------------------------------------------
 
+// A machine is the family's part of a table: its numbers (visit lists them
+// in the canonical order), `Rebind<Other>` (the same machine in another
+// scalar: table_cast), encoder_offset(i) (the coarse calibration's zero of
+// joint i, in joint units: the controller's drive registers) and its names
+// in C++ (`kincal table` writes them into the generated header). The
+// compensator's half of a family is compensation_detail::Model<Machine>.
 template <class S> struct StewartMachine {
   using Scalar = S;
+  template <class Other> using Rebind = StewartMachine<Other>;
   static constexpr MachineFamily family = MachineFamily::Stewart6Ups;
+  static constexpr const char* type_name = "StewartMachine";
+  static constexpr const char* family_name = "Stewart6Ups";
   StewartGeometryTable<S> nominal;     // nominal IK: the reference of the correction bound
   StewartGeometryTable<S> calibrated;  // seed 001: IK of this geometry is the compensation
+
+  // seed 001: l_i = q_i + dl_i, the leg's encoder zero error.
+  S encoder_offset(int i) const { return calibrated.length_offset[i] - nominal.length_offset[i]; }
 
   template <class Self, class F> static constexpr void visit(Self& s, F& f) {
     StewartGeometryTable<S>::visit(s.nominal, f);
@@ -205,11 +217,16 @@ template <class S> struct StewartMachine {
 
 template <class S> struct HybridMachine {
   using Scalar = S;
+  template <class Other> using Rebind = HybridMachine<Other>;
   static constexpr MachineFamily family = MachineFamily::Hybrid;
+  static constexpr const char* type_name = "HybridMachine";
+  static constexpr const char* family_name = "Hybrid";
   HybridGeometryTable<S> nominal;  // the nominal machine (B is evaluated on it)
   S up_split;                      // e = |A44 A64|, mm (seed 000 Table 1: 345)
   S encoder_offsets[6];            // ξ̂, added to nominal.joint_offset in the IK
   S source_errors[kHybridSourceErrorCount];  // Δχ̂; entries 0..5 (encoders) must be 0
+
+  S encoder_offset(int i) const { return encoder_offsets[i]; }
 
   template <class Self, class F> static constexpr void visit(Self& s, F& f) {
     HybridGeometryTable<S>::visit(s.nominal, f);
@@ -338,8 +355,7 @@ template <class Machine> void table_to_values(const CalibrationTable<Machine>& t
 // The same table in another Scalar (values rounded to nearest), resealed:
 // the CRC of a float table is that of its float values.
 template <class Other, class Machine> auto table_cast(const CalibrationTable<Machine>& t) {
-  using OtherMachine = typename std::conditional<Machine::family == MachineFamily::Hybrid, HybridMachine<Other>,
-                                                 StewartMachine<Other>>::type;
+  using OtherMachine = typename Machine::template Rebind<Other>;
   double values[table_value_count<Machine>()] = {};
   table_to_values(t, values);
   CalibrationTable<OtherMachine> out = table_from_values<OtherMachine>(values, 0u);

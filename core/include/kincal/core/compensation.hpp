@@ -160,7 +160,28 @@ template <class Scalar> bool orthonormal(const Mat3<Scalar>& R) {
 
 namespace compensation_detail {
 
-// The machine-specific half: the controller's copies of the table's geometry.
+// The machine-specific half of the compensator, one specialisation per
+// family: the Compensator reaches a machine only through it (issue #33: no
+// if/else over families). Each holds the controller's copies of the table's
+// geometry and provides
+//   bool load(const Machine&)         — the copies (false: unusable values);
+//   Pose home_pose() const            — the pose home_command() compensates;
+//   Status nominal_configuration(pose, q_nom, need_load, g, load,
+//       payload_weight, payload_com, payload_load) const
+//                                     — step 2: q_nom, the singularity test,
+//                                       the static load of a unit weight
+//                                       along g (if need_load) and of the
+//                                       formulas' payload (if payload_load);
+//   bool exact() const, Status solve_exact(target, q*, warm) const,
+//   Status solve_closed_form(target, q*) const
+//                                     — step 4: the geometry's IK, by an
+//                                       iterative exact model where the
+//                                       family has one and the table needs
+//                                       it, else in closed form (apart, so
+//                                       that the two are never on the
+//                                       controller's stack together).
+// Step 2's payload is a weight and a centre of mass in the platform frame
+// (formula_effects.hpp); a family that takes it elsewhere says so.
 template <class Machine> struct Model;
 
 template <class S> struct Model<StewartMachine<S>> {
@@ -171,6 +192,39 @@ template <class S> struct Model<StewartMachine<S>> {
     calibrated = to_core(m.calibrated);
     return true;
   }
+  Pose<S> home_pose() const { return nominal.home; }
+
+  // The nominal IK with its Jacobian: the singularity test of the NC point,
+  // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
+  template <bool kPayload>
+  Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
+                               [[maybe_unused]] S payload_weight, [[maybe_unused]] const Vec3<S>& payload_com,
+                               [[maybe_unused]] Vec6<S>* payload_load) const {
+    Mat6<S> J;
+    const Status s = stewart_ik(nominal, pose, nominal_q, &J);
+    if (s != Status::Ok) return s;
+    if (need_load && !static_load_inverse(J, g, load)) return Status::Singular;
+    if constexpr (kPayload) {
+      // The payload's wrench at the platform origin: force F = w·g and
+      // moment r × F, r the centre of mass in the base frame. Written out
+      // by component: Eigen's vectorized cross of two float Vec3 reads 16
+      // bytes of a 12-byte vector (GCC 12's -Warray-bounds on x86).
+      const S w = payload_weight;
+      const Vec3<S> r = pose.R * payload_com;
+      Vec6<S> wrench;
+      wrench << w * g(0), w * g(1), w * g(2), w * (r(1) * g(2) - r(2) * g(1)), w * (r(2) * g(0) - r(0) * g(2)),
+          w * (r(0) * g(1) - r(1) * g(0));
+      if (!static_load_of_wrench(J, wrench, *payload_load)) return Status::Singular;
+    }
+    return Status::Ok;
+  }
+
+  // seed 001: the IK of the calibrated geometry is the compensation.
+  static constexpr bool exact() { return false; }
+  template <class Warm> Status solve_exact(const Pose<S>& target, Vec6<S>& ideal, Warm*) const {
+    return solve_closed_form(target, ideal);
+  }
+  Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return stewart_ik(calibrated, target, ideal); }
 };
 
 template <class S> struct Model<HybridMachine<S>> {
@@ -205,6 +259,43 @@ template <class S> struct Model<HybridMachine<S>> {
 #endif
     return true;
   }
+  // The reference pose: the origin of {R} with the tool aligned to it.
+  Pose<S> home_pose() const { return Pose<S>(); }
+
+  // q_nom from the nominal closed form; the singularity test (parallel,
+  // constraint and wrist: hybrid_wrenches), with J_P factorised once; the
+  // static loads. The payload acts at the tool point (identify refuses a
+  // centre of mass elsewhere), so `payload_com` is not read.
+  template <bool kPayload>
+  Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
+                               [[maybe_unused]] S payload_weight, const Vec3<S>&,
+                               [[maybe_unused]] Vec6<S>* payload_load) const {
+    HybridFrames<S> f;
+    Vec3<S> angles;
+    Status s = hybrid_frames_at_pose(nominal, pose, f, angles);
+    if (s != Status::Ok) return s;
+    nominal_q.template head<3>() = f.legs.colwise().norm().transpose();
+    nominal_q.template tail<3>() = angles;
+    nominal_q -= nominal.joint_offset;
+    HybridWrenches<S> w;
+    s = hybrid_wrenches(nominal, f, w);
+    if (s != Status::Ok) return s;
+    if (need_load) load = hybrid_static_load(nominal, f, w, g);
+    if constexpr (kPayload) *payload_load = payload_weight * hybrid_static_load(nominal, f, w, g);
+    return Status::Ok;
+  }
+
+  // The identified machine's exact IK (issue #31); with no structural
+  // error it is seed 000 Fig. 4's ideal IK with ξ̂.
+  bool exact() const { return structural; }
+  template <class Warm> Status solve_exact(const Pose<S>& target, Vec6<S>& ideal, [[maybe_unused]] Warm* warm) const {
+#if KINCAL_HYBRID_STORED_CHAINS
+    return hybrid_exact_ik(nominal, chains, target, ideal, nullptr, warm);
+#else
+    return hybrid_exact_ik(nominal, up_split, source_errors, encoder_offsets, target, ideal);
+#endif
+  }
+  Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return hybrid_ik(controller, target, ideal); }
 };
 
 }  // namespace compensation_detail
@@ -298,13 +389,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
     return evaluate(scratch, p, q, ideal, dir);
   }
 
-  Pose<Scalar> home_pose() const {
-    if constexpr (family == MachineFamily::Hybrid) {
-      return Pose<Scalar>();
-    } else {
-      return model_.nominal.home;
-    }
-  }
+  Pose<Scalar> home_pose() const { return model_.home_pose(); }
 
   // The state at the start of a stream with the machine at joint command
   // `current` (held until the first accepted point, and the reference of the
@@ -448,7 +533,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
       // compile-time flags: a generated policy knows; the host's says all).
       Vec6<Scalar> payload_load = Vec6<Scalar>::Zero();
       const CompensationStatus st =
-          prepare(pose, temperature, nominal_q, load, target, Formulas::reads_load ? &payload_load : nullptr);
+          prepare(pose, temperature, nominal_q, load, target, &payload_load);
       if (st != CompensationStatus::Ok) return st;
       if constexpr (Formulas::reads_load) vars.set_loads(payload_load);
       if constexpr (Formulas::pose_twist) {
@@ -477,88 +562,36 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
   // chains and the closed form's frames are never on the stack together.
   KINCAL_NOINLINE CompensationStatus solve(const Pose<Scalar>& target, Vec6<Scalar>& ideal,
                                            [[maybe_unused]] CompensatorWarmStart<Scalar>* warm) const {
-    if constexpr (family == MachineFamily::Hybrid) {
-      // The identified machine's exact IK (issue #31); with no structural
-      // error it is seed 000 Fig. 4's ideal IK with ξ̂.
-      if (model_.structural) {
-#if KINCAL_HYBRID_STORED_CHAINS
-        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.chains, target, ideal, nullptr, warm));
-#else
-        return to_compensation_status(hybrid_exact_ik(model_.nominal, model_.up_split, model_.source_errors,
-                                                      model_.encoder_offsets, target, ideal));
-#endif
-      }
-    }
+    // (hybrid: the identified machine's exact IK, issue #31; with no
+    // structural error, seed 000 Fig. 4's ideal IK with ξ̂ in closed form)
+    if (model_.exact()) return to_compensation_status(model_.solve_exact(target, ideal, warm));
     return solve_closed_form(target, ideal);
   }
 
-  // The closed-form IK: the 6-UPS's calibrated geometry (seed 001), the
-  // hybrid's nominal one with ξ̂ (seed 000 Fig. 4).
+  // The closed-form IK (6-UPS: the calibrated geometry's, seed 001; hybrid:
+  // the nominal one with ξ̂, seed 000 Fig. 4).
   KINCAL_NOINLINE_FLATTEN CompensationStatus solve_closed_form(const Pose<Scalar>& target, Vec6<Scalar>& ideal) const {
-    if constexpr (family == MachineFamily::Stewart6Ups)
-      return to_compensation_status(stewart_ik(model_.calibrated, target, ideal));
-    else
-      return to_compensation_status(hybrid_ik(model_.controller, target, ideal));
+    return to_compensation_status(model_.solve_closed_form(target, ideal));
   }
 
   // At the nominal configuration of `pose`: q_nom, the singularity test, the
   // static load; then the pose handed to the IK (thermal pre-scaling).
-  // `payload_load` (formula effects that read `load`): the static joint
-  // loads under the formulas' payload (its weight at its centre of mass; the
-  // hybrid's at the tool point). With a pose-kind formula, its twist comes
+  // `payload_load` (formula effects that read `load`, and then not null):
+  // the static joint loads under the formulas' payload (its weight at its
+  // centre of mass; the hybrid's at the tool point). With a pose-kind formula, its twist comes
   // before the thermal pre-scaling, which geometry() then applies.
   KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                                              Vec6<Scalar>& load, Pose<Scalar>& target,
                                              Vec6<Scalar>* payload_load = nullptr) const {
-    using CS = CompensationStatus;
     const bool thermal_here = thermal_ && !(Formulas::pose_twist && formulas_.has_pose());
-    if constexpr (family == MachineFamily::Stewart6Ups) {
-      // The nominal IK with its Jacobian: the singularity test of the NC point,
-      // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
-      Mat6<Scalar> J;
-      const Status s = stewart_ik(model_.nominal, pose, nominal_q, &J);
-      if (s != Status::Ok) return to_compensation_status(s);
-      if (compliance_ && !static_load_inverse(J, effects_.load_direction, load)) return CS::Singular;
-      if constexpr (Formulas::reads_load) {
-        if (payload_load != nullptr) {
-          // The payload's wrench at the platform origin: force F = w·g and
-          // moment r × F, r the centre of mass in the base frame. Written out
-          // by component: Eigen's vectorized cross of two float Vec3 reads 16
-          // bytes of a 12-byte vector (GCC 12's -Warray-bounds on x86).
-          const Scalar w = formulas_.payload_weight();
-          const Vec3<Scalar> r = pose.R * formulas_.payload_com();
-          const Vec3<Scalar>& g = effects_.load_direction;
-          Vec6<Scalar> wrench;
-          wrench << w * g(0), w * g(1), w * g(2), w * (r(1) * g(2) - r(2) * g(1)), w * (r(2) * g(0) - r(0) * g(2)),
-              w * (r(0) * g(1) - r(1) * g(0));
-          if (!static_load_of_wrench(J, wrench, *payload_load)) return CS::Singular;
-        }
-      }
-      target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
-      return CS::Ok;
-    } else {
-      HybridFrames<Scalar> f;
-      Vec3<Scalar> angles;
-      Status s = hybrid_frames_at_pose(model_.nominal, pose, f, angles);
-      if (s != Status::Ok) return to_compensation_status(s);
-      nominal_q.template head<3>() = f.legs.colwise().norm().transpose();
-      nominal_q.template tail<3>() = angles;
-      nominal_q -= model_.nominal.joint_offset;
-      // The singularity test of the NC point (parallel, constraint and wrist:
-      // hybrid_wrenches), with J_P factorised once for the error twist.
-      HybridWrenches<Scalar> w;
-      s = hybrid_wrenches(model_.nominal, f, w);
-      if (s != Status::Ok) return to_compensation_status(s);
-      if (compliance_) load = hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
-      if constexpr (Formulas::reads_load) {
-        // (the hybrid's payload acts at the tool point: identify refuses a
-        // centre of mass elsewhere)
-        if (payload_load != nullptr)
-          *payload_load = formulas_.payload_weight() * hybrid_static_load(model_.nominal, f, w, effects_.load_direction);
-      }
-      target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
-      return CS::Ok;
-    }
+    Scalar payload_weight = Scalar(0);
+    Vec3<Scalar> payload_com = Vec3<Scalar>::Zero();
+    if constexpr (Formulas::reads_load) payload_weight = formulas_.payload_weight(), payload_com = formulas_.payload_com();
+    const Status s = model_.template nominal_configuration<Formulas::reads_load>(
+        pose, nominal_q, compliance_, effects_.load_direction, load, payload_weight, payload_com, payload_load);
+    if (s != Status::Ok) return to_compensation_status(s);
+    target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
+    return CompensationStatus::Ok;
   }
 
   const Table* table_;
@@ -627,6 +660,18 @@ HybridCalibrationTable<Scalar> nominal_table(const HybridGeometry<Scalar>& g, Sc
   t.bounds = default_bounds(g);
   seal(t);
   return t;
+}
+
+// The nominal table of the machine a calibrated table describes (its
+// nominal geometry, the machine data of `effects`): the firmware's fallback,
+// as `kincal table` writes it beside the calibration.
+template <class S>
+StewartCalibrationTable<S> nominal_table_of(const StewartMachine<S>& m, const EffectParameters<S>& effects) {
+  return nominal_table(to_core(m.nominal), effects);
+}
+template <class S>
+HybridCalibrationTable<S> nominal_table_of(const HybridMachine<S>& m, const EffectParameters<S>& effects) {
+  return nominal_table(to_core(m.nominal), m.up_split, effects);
 }
 
 }  // namespace kincal

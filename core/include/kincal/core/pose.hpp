@@ -45,7 +45,7 @@ template <class Scalar> Mat3<Scalar> rot_z(Scalar a) {
 }
 
 // R = Rz(rz)·Ry(ry)·Rx(rx)
-template <class Scalar> Mat3<Scalar> rotation_from_rpy(Scalar rx, Scalar ry, Scalar rz) {
+template <class Scalar> inline Mat3<Scalar> rotation_from_rpy(Scalar rx, Scalar ry, Scalar rz) {
   return rot_z(rz) * rot_y(ry) * rot_x(rx);
 }
 

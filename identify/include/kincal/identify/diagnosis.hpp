@@ -7,6 +7,7 @@
 // hotspots. docs/diagnosis.md explains every number.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -126,6 +127,10 @@ struct NoiseEstimates {
 
 struct Diagnosis {
   std::string robot, data_file, family;
+  // Which joints are revolute (rad; the report shows them in degrees and
+  // their residuals in µrad) rather than prismatic (mm): the robot's own
+  // word (Robot::revolute), never read off the family's name.
+  std::array<bool, 6> revolute{};
   double noise_um = 0;
   std::string noise_source;  // "given", "repeated nodes", "estimated from neighbouring nodes in …"
   // An estimated noise the data cannot vouch for (too few nodes, neighbours

@@ -232,14 +232,7 @@ template <class Machine, class Registers, class Stream, class Formulas = NoFormu
   // The coarse calibration's encoder offsets of a table, in joint units.
   static Vec6<Scalar> encoder_offsets(const Table& t) {
     Vec6<Scalar> o;
-    for (int i = 0; i < 6; ++i) {
-      if constexpr (Machine::family == MachineFamily::Hybrid) {
-        o(i) = t.machine.encoder_offsets[i];
-      } else {
-        // seed 001: l_i = q_i + dl_i, the leg's encoder zero error.
-        o(i) = t.machine.calibrated.length_offset[i] - t.machine.nominal.length_offset[i];
-      }
-    }
+    for (int i = 0; i < 6; ++i) o(i) = t.machine.encoder_offset(i);
     return o;
   }
 
