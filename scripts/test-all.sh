@@ -58,18 +58,26 @@ sanitizer_build=(-DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_C
 # for compliance, backlash, cyclic and thermal, identifyBlunder.*).
 # HybridAcrossMachines repeats the single-machine tracker and full-pose tests
 # (HybridTracker.*, HybridFullPose.*, which run here) on 24 more machines.
-sanitize_skip='HybridDefaultBaseCompensatesAtLeastAsWellAsOls|ComplianceAndScaleTogetherFitLikeComplianceAlone'
-sanitize_skip+='|HiddenEffect.IsNamedFirstAcceptedAndCompensated/hybrid_scale'
-sanitize_skip+='|IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable|HoldsParametersTheDataCannotTellFromTheBase'
-sanitize_skip+='|HybridUpsActuatorScaleIsFittedFromAFarStart|HybridPairsAreNamedAndCompensatedNearTheFloor'
-sanitize_skip+='|HybridEliminationRoundsKeepTheMinimum|HybridRivalEffectsAreChosenByMallowsCp'
-sanitize_skip+='|HybridTrackerEffect|HybridAcrossMachines'
+sanitize_skip_tests=(
+  'HybridDefaultBaseCompensatesAtLeastAsWellAsOls'
+  'ComplianceAndScaleTogetherFitLikeComplianceAlone'
+  'HiddenEffect.IsNamedFirstAcceptedAndCompensated/hybrid_scale'
+  'IdentifyWithEffectsHoldsWhatTheDataCannotTellAndMakesATable'
+  'HoldsParametersTheDataCannotTellFromTheBase'
+  'HybridUpsActuatorScaleIsFittedFromAFarStart'
+  'HybridPairsAreNamedAndCompensatedNearTheFloor'
+  'HybridEliminationRoundsKeepTheMinimum'
+  'HybridRivalEffectsAreChosenByMallowsCp'
+  'HybridTrackerEffect'
+  'HybridAcrossMachines'
 # The loops on independently simulated machines (identify_independent_*_test)
 # run the kincal tool 30-50 times each: numerical evidence, in the host
 # stage; the identify / diagnose / compensate paths they drive run under the
 # sanitizers in the tests above.
-sanitize_skip+='|EachPhysicalGroupIsAbsorbedAndCompensated|IndependentDiagnosis'
-sanitize_skip+='|IndependentHybrid.MillimetreErrorsAreAbsorbedByTheExactModel|IndependentEffects.StewartClearance'
+  'EachPhysicalGroupIsAbsorbedAndCompensated'
+  'IndependentDiagnosis'
+  'IndependentHybrid.MillimetreErrorsAreAbsorbedByTheExactModel'
+  'IndependentEffects.StewartClearance'
 # The slowest of the rest (20-150 s each under the sanitizers, at most 4 s in
 # Release; CI's budget, docs/benchmarks.md "Build time (CI)"), each with a
 # shorter test of the same path that stays here:
@@ -84,11 +92,17 @@ sanitize_skip+='|IndependentHybrid.MillimetreErrorsAreAbsorbedByTheExactModel|In
 #   appKincal.OneTrackerTargetInItsOwnFrameThroughTheTool,
 #   FormulaEffectLoop.TheHybridsUpsLegs*, UserEffect.*;
 # - planning on every machine: Plan.PosesAreReachable*.
-sanitize_skip+='|CoreRus6.WorkspaceBoxReachableInsideLimits|PortControllerProperty'
-sanitize_skip+='|NoiseEstimateDiagnosis.OutsideMisfitNeverExplained|Outside.SaysUnexplainedWithTheJointAndStrokeAsHotspot/"hybrid"'
-sanitize_skip+='|HybridFullPose.HiddenBacklashIsNamedFittedAndCompensated'
-sanitize_skip+='|appKincal.TheHybridFromFullPosesThroughTheTool|appKincal.TheHybridLoopFallsAtEveryStep'
-sanitize_skip+='|FormulaEffectLoop.SixUpsEffectsOutsideTheLibrary|Plan.BeatsTheGridOnEveryMachineAndMeasurement'
+  'CoreRus6.WorkspaceBoxReachableInsideLimits'
+  'PortControllerProperty'
+  'NoiseEstimateDiagnosis.OutsideMisfitNeverExplained'
+  'Outside.SaysUnexplainedWithTheJointAndStrokeAsHotspot/"hybrid"'
+  'HybridFullPose.HiddenBacklashIsNamedFittedAndCompensated'
+  'appKincal.TheHybridFromFullPosesThroughTheTool'
+  'appKincal.TheHybridLoopFallsAtEveryStep'
+  'FormulaEffectLoop.SixUpsEffectsOutsideTheLibrary'
+  'Plan.BeatsTheGridOnEveryMachineAndMeasurement'
+)
+sanitize_skip=$(IFS='|'; echo "${sanitize_skip_tests[*]}")
 
 # The sanitizer builds (sanitize, fuzz) report leaks, but not GiNaC's and
 # CLN's own (host_tests/lsan.supp): ours still are. print_suppressions=0:

@@ -38,8 +38,8 @@ double rms_per_coordinate(const std::vector<Vec3<double>>& r) {
   return n ? std::sqrt(sum / static_cast<double>(n)) : std::nan("");
 }
 
-// Hybrid machines drive three prismatic and three revolute joints (q4..q6 in
-// rad); every 6-UPS joint is prismatic.
+// Which joints are revolute (shown in degrees, residuals in µrad) is the
+// robot's word, carried by the diagnosis (Robot::revolute).
 bool revolute_joint(const Diagnosis& d, int i) { return d.revolute[std::size_t(i)]; }
 double joint_display(const Diagnosis& d, int i, double q) { return revolute_joint(d, i) ? q * (180.0 / kPi) : q; }
 const char* joint_unit(const Diagnosis& d, int i) { return revolute_joint(d, i) ? "deg" : "mm"; }

@@ -219,7 +219,9 @@ template <class S> struct Model<StewartMachine<S>> {
     return Status::Ok;
   }
 
-  // seed 001: the IK of the calibrated geometry is the compensation.
+  // seed 001: the IK of the calibrated geometry is the compensation; there
+  // is no iterative model (exact() is false at compile time, so solve_exact
+  // is never called and only keeps Compensator::solve one form).
   static constexpr bool exact() { return false; }
   template <class Warm> Status solve_exact(const Pose<S>& target, Vec6<S>& ideal, Warm*) const {
     return solve_closed_form(target, ideal);
