@@ -9,6 +9,7 @@
 #include "effects/base_fit.hpp"
 #include "families/family_errors.hpp"
 #include "families/hybrid/hybrid_family.hpp"
+#include "families/rus6/rus6_family.hpp"
 #include "families/stewart/stewart_family.hpp"
 #include "kincal/identify/joint_limits.hpp"
 
@@ -18,9 +19,18 @@ namespace {
 
 const StewartFamily kStewart;
 const HybridFamily kHybrid;
-const Family* const kFamilies[] = {&kStewart, &kHybrid};
+const Rus6Family kRus6;
+const Family* const kFamilies[] = {&kStewart, &kHybrid, &kRus6};
 
 }  // namespace
+
+// Without an own pipeline nothing routes a table to it (reads_own_measurement
+// is false): reaching here is a caller's bug, said as one.
+detail::BaseModel Family::fit_base(const Robot& robot, const PoseTable&, const std::vector<std::optional<EffectNode>>&,
+                                   std::optional<EstimatorKind>, bool, double) const {
+  throw std::logic_error(std::string("the ") + name() + " family has no own pipeline (robot '" + robot.name +
+                         "'): its measurements go to the target fit");
+}
 
 // A family offers no stepped base fit unless it says so (effects alternate
 // with its fit_base).

@@ -56,6 +56,16 @@ struct HandGrid {
   bool tilted = false;
 };
 
+// One labelled run of a table's values (kincal table's generated header):
+// `values` names each value on its own line where given, `note` follows the
+// label.
+struct TableGroup {
+  std::string label;  // "machine.nominal.base"
+  int count = 0;
+  std::vector<std::string> values;
+  std::string note;
+};
+
 // What a simulated row reaches on the actual machine (simulate.cpp).
 struct ReachedPose {
   Status status = Status::Ok;
@@ -131,16 +141,20 @@ class Family {
   virtual std::string alias_of(const std::string&) const { return {}; }
   // How the base model reads in messages ("seed 001 42-parameter model").
   virtual const char* error_model() const = 0;
+  // ---- an own pipeline (optional): a family without one is measured by
+  // full poses or tracker targets through the family-free target fit
+  // (target_calibration.hpp) alone, and keeps the defaults here.
   // The family's own pipeline on its own measurement, as a linear problem at
   // its solution (effects/base_fit.hpp: fit_base documents the arguments).
+  // Called only where reads_own_measurement (the default: std::logic_error).
   virtual detail::BaseModel fit_base(const Robot& robot, const PoseTable& fit_data,
                                      const std::vector<std::optional<EffectNode>>& nodes,
                                      std::optional<EstimatorKind> estimator, bool finish_least_squares,
-                                     double ridge_k) const = 0;
+                                     double ridge_k) const;  // families.cpp
 
   // How the family's own base fit reads in messages ("seed 001's iterated
   // least squares").
-  virtual const char* base_fit() const = 0;
+  virtual const char* base_fit() const { return "the target fit's Gauss-Newton"; }
   // The fewest nodes the deleted-node screen of the family's own fit leaves
   // (identify/outliers.hpp; identify --effects screens with the same).
   virtual Eigen::Index outlier_min_nodes() const = 0;
@@ -162,12 +176,25 @@ class Family {
   // and the default bounds of the model's table; calibration_table.cpp adds
   // the effects and the bounds, seals and checks it.
   virtual AnyCalibrationTable machine_table(const CalibrationModel& model) const = 0;
+  // The table check's words (io/calibration_table.cpp): the description key
+  // of the joints' range ("stroke", "joint_limits"); why the machine part of
+  // `table` (this family's) is outside `limits`, naming the first value, its
+  // cap and the key that raises it ("" when it is inside); why its values
+  // fail validate_table where a model can cause it ("" otherwise: the check
+  // then says it generically).
+  virtual const char* joint_range_key() const = 0;
+  // The machine part's values as labelled runs, in core's canonical order
+  // (the Machine's visit).
+  virtual std::vector<TableGroup> machine_groups(const Robot& robot) const = 0;
+  virtual std::string machine_limit_violation(const AnyCalibrationTable& table,
+                                              const MachineLimits<double>& limits) const = 0;
+  virtual std::string machine_value_violation(const AnyCalibrationTable&) const { return {}; }
 
   // ---- measurement
   // What the family's own pipeline reads from a table (6-UPS: full poses;
   // hybrid: seed 000's gauge, when the robot names no targets). Otherwise
   // target columns go to the target fit (target_calibration.hpp).
-  virtual bool reads_own_measurement(const Robot& robot, const PoseTable& data) const = 0;
+  virtual bool reads_own_measurement(const Robot&, const PoseTable&) const { return false; }
   // What the table lacks for the family's own measurement and for the
   // target fit alike, as the error message says it; empty when it has enough.
   virtual std::string missing_measurement(const Robot& robot, const PoseTable& data) const = 0;

@@ -42,6 +42,16 @@ HybridGeometry<double> without_limits(HybridGeometry<double> g) {
   return g;
 }
 
+Rus6Geometry<double> without_limits(Rus6Geometry<double> g) {
+  const double half_turn = pi<double>() * (1 - 1e-12);  // strictly narrower than a turn (rus6_valid_geometry)
+  for (int i = 0; i < 6; ++i) {
+    const double mid = 0.5 * (g.min_joint(i) + g.max_joint(i));
+    g.min_joint(i) = mid - half_turn;
+    g.max_joint(i) = mid + half_turn;
+  }
+  return g;
+}
+
 Robot without_limits(Robot robot) {
   std::visit([](auto& g) { g = without_limits(g); }, robot.geometry);
   return robot;

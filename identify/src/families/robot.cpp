@@ -51,7 +51,9 @@ Eigen::Index Robot::outlier_min_nodes() const { return family_of(*this).outlier_
 
 // ---------------------------------------------------------------- built-ins
 
-bool is_builtin_robot(const std::string& name) { return name == "stewart-seed001" || name == "hybrid-seed000"; }
+bool is_builtin_robot(const std::string& name) {
+  return name == "stewart-seed001" || name == "hybrid-seed000" || name == "rus6-ref";
+}
 
 Robot builtin_robot(const std::string& name) {
   Robot r;
@@ -61,8 +63,11 @@ Robot builtin_robot(const std::string& name) {
   } else if (name == "hybrid-seed000") {
     r.geometry = make_hybrid_seed000<double>();
     r.gauge_radius = HybridSeed000Dimensions::gauge_radius;
+  } else if (name == "rus6-ref") {
+    r.geometry = make_rus6_ref<double>();
+    r.screw_lead = Rus6RefDimensions::cyclic_period;
   } else {
-    throw InputError("unknown built-in robot '" + name + "' (built-ins: stewart-seed001, hybrid-seed000)");
+    throw InputError("unknown built-in robot '" + name + "' (built-ins: stewart-seed001, hybrid-seed000, rus6-ref)");
   }
   return r;
 }
@@ -73,7 +78,7 @@ Robot load_robot(const std::string& name_or_path) {
   struct stat st {};
   if (::stat(name_or_path.c_str(), &st) != 0)
     throw InputError(name_or_path, 0, 0,
-                     "neither a built-in robot (stewart-seed001, hybrid-seed000) nor a readable robot description file");
+                     "neither a built-in robot (stewart-seed001, hybrid-seed000, rus6-ref) nor a readable robot description file");
   return parse_robot(read_text_file(name_or_path), name_or_path);
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "families/family.hpp"
+#include "families/table_words.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/robot.hpp"
@@ -16,56 +17,8 @@ namespace kincal::identify {
 
 namespace {
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
-
-// Where the user raises a bound a message names: every bound of the table
-// check is a robot description key (GUIDE "Bounds, per machine").
-std::string key_note(const char* key) { return std::string(" (robot description key '") + key + "')"; }
-
-// The first value of `values` (named `name`) whose magnitude is above the
-// cap of the robot description key `key` (which names the cap too).
-template <std::size_t N>
-std::string above(const char* name, const double (&values)[N], double cap, const char* key, const double* base = nullptr) {
-  for (std::size_t k = 0; k < N; ++k) {
-    const double v = values[k] - (base != nullptr ? base[k] : 0.0);
-    if (!(std::abs(v) <= cap))
-      return std::string(name) + "[" + std::to_string(k) + "] = " + number(v) + " above " + key + " " + number(cap) +
-             key_note(key);
-  }
-  return {};
-}
-
-// The hybrid's source errors, each against its own cap: the angles against
-// max_angle_error, the lengths against max_geometry_error (as core's
-// machine_inside).
-std::string source_error_above(const double (&values)[kHybridSourceErrorCount], const MachineLimits<double>& l) {
-  for (int k = 0; k < kHybridSourceErrorCount; ++k) {
-    const bool angle = HybridErrorLayout::angular(k);
-    const double cap = angle ? l.max_angle_error : l.max_geometry_error;
-    const char* key = angle ? "max_angle_error" : "max_geometry_error";
-    if (!(std::abs(values[k]) <= cap))
-      return "machine.source_errors[" + std::to_string(k) + "] = " + number(values[k]) + (angle ? " rad" : " mm") +
-             " above " + key + " " + number(cap) + key_note(key);
-  }
-  return {};
-}
-
-// Why validate_table found a value out of range (TableValues) where a model
-// can cause it: the hybrid's encoder offsets, one correction at every point.
-template <class Machine> std::string value_violation(const CalibrationTable<Machine>& t) {
-  if constexpr (Machine::family == MachineFamily::Hybrid) {
-    for (int i = 0; i < 6; ++i)
-      if (!(std::abs(t.machine.encoder_offsets[i]) <= t.bounds.max_correction[i]))
-        return "encoder offset " + std::to_string(i + 1) + " = " + number(t.machine.encoder_offsets[i]) +
-               " above its correction bound " + number(t.bounds.max_correction[i]) + key_note("max_correction");
-  }
-  return "a correction above its bound or a value out of range";
-}
+using detail::key_note;
+std::string number(double v) { return detail::table_number(v); }
 
 // Fills the effects and bounds, seals the table and checks it against the
 // machine limits of the model's nominal robot: the status, and why in words.
@@ -79,9 +32,15 @@ CompensationStatus finish(CalibrationTable<Machine>& t, const CalibrationModel& 
   const MachineLimits<double> limits = machine_limits(model.nominal, options);
   const CompensationStatus st = validate_table(t, limits);
   if (why != nullptr && st == CompensationStatus::TableLimits)
-    *why = "the calibration table is outside the machine limits: " + limit_violation(AnyCalibrationTable(t), limits);
-  else if (why != nullptr && st != CompensationStatus::Ok)
-    *why = std::string("the calibration table fails its check (") + to_string(st) + "): " + value_violation(t);
+    *why = "the calibration table is outside the machine limits: " +
+           limit_violation(model.nominal, AnyCalibrationTable(t), limits);
+  else if (why != nullptr && st != CompensationStatus::Ok) {
+    // Where a model can cause it, the family names the value (the encoder
+    // offsets, one correction at every point).
+    std::string value = family_of(model.nominal).machine_value_violation(AnyCalibrationTable(t));
+    if (value.empty()) value = "a correction above its bound or a value out of range";
+    *why = std::string("the calibration table fails its check (") + to_string(st) + "): " + value;
+  }
   return st;
 }
 
@@ -100,15 +59,15 @@ MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableO
   return l;
 }
 
-std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<double>& l) {
-  return std::visit(
+std::string limit_violation(const Robot& robot, const AnyCalibrationTable& any, const MachineLimits<double>& l) {
+  const Family& family = family_of(robot);
+  const std::string why = std::visit(
       [&](const auto& t) -> std::string {
         if (validate_table(t, l) != CompensationStatus::TableLimits) return {};
         if (!limits_detail::sane(l))
           return "the machine limits are not sane (a cap negative or not finite, a joint range empty, a correction "
                  "bound not positive)";
-        using M = typename std::decay_t<decltype(t)>::MachineType;
-        const char* range_key = M::family == MachineFamily::Hybrid ? "joint_limits" : "stroke";
+        const char* range_key = family.joint_range_key();
         for (int i = 0; i < 6; ++i) {
           const std::string j = "[" + std::to_string(i) + "] ";
           if (!(t.bounds.min_joint[i] >= l.min_joint[i]))
@@ -121,47 +80,27 @@ std::string limit_violation(const AnyCalibrationTable& any, const MachineLimits<
             return "bounds.max_correction" + j + number(t.bounds.max_correction[i]) + " above the limit " +
                    number(l.max_correction[i]) + key_note("max_correction");
         }
-        std::string why;
+        std::string effect;
         const auto& e = t.effects;
         const double* cap = t.bounds.max_correction;
-        for (int i = 0; i < 6 && why.empty(); ++i) {
+        for (int i = 0; i < 6 && effect.empty(); ++i) {
           const std::string j = "[" + std::to_string(i) + "] = ";
           const std::string bound = " above the correction bound " + number(cap[i]) + key_note("max_correction");
-          if (!(std::abs(e.scale[i]) <= l.max_scale)) why = "effects.scale" + j + number(e.scale[i]) + " above max_scale " + number(l.max_scale) + key_note("max_scale");
-          else if (!(std::abs(e.backlash[i]) <= cap[i])) why = "effects.backlash" + j + number(e.backlash[i]) + bound;
-          else if (!(std::abs(e.compliance[i]) <= cap[i])) why = "effects.compliance" + j + number(e.compliance[i]) + bound;
-          else if (!(std::abs(e.cyclic_sin[i]) <= cap[i])) why = "effects.cyclic_sin" + j + number(e.cyclic_sin[i]) + bound;
-          else if (!(std::abs(e.cyclic_cos[i]) <= cap[i])) why = "effects.cyclic_cos" + j + number(e.cyclic_cos[i]) + bound;
+          if (!(std::abs(e.scale[i]) <= l.max_scale)) effect = "effects.scale" + j + number(e.scale[i]) + " above max_scale " + number(l.max_scale) + key_note("max_scale");
+          else if (!(std::abs(e.backlash[i]) <= cap[i])) effect = "effects.backlash" + j + number(e.backlash[i]) + bound;
+          else if (!(std::abs(e.compliance[i]) <= cap[i])) effect = "effects.compliance" + j + number(e.compliance[i]) + bound;
+          else if (!(std::abs(e.cyclic_sin[i]) <= cap[i])) effect = "effects.cyclic_sin" + j + number(e.cyclic_sin[i]) + bound;
+          else if (!(std::abs(e.cyclic_cos[i]) <= cap[i])) effect = "effects.cyclic_cos" + j + number(e.cyclic_cos[i]) + bound;
         }
-        if (!why.empty()) return why;
+        if (!effect.empty()) return effect;
         if (!(std::abs(e.thermal) <= l.max_thermal))
           return "effects.thermal = " + number(e.thermal) + " above max_thermal " + number(l.max_thermal) +
                  key_note("max_thermal");
-        if constexpr (M::family == MachineFamily::Hybrid) {
-          why = source_error_above(t.machine.source_errors, l);
-        } else {
-          const auto& m = t.machine;
-          why = above("machine.calibrated.base - nominal", m.calibrated.base, l.max_geometry_error, "max_geometry_error",
-                      m.nominal.base);
-          if (why.empty())
-            why = above("machine.calibrated.platform - nominal", m.calibrated.platform, l.max_geometry_error,
-                        "max_geometry_error", m.nominal.platform);
-          for (int i = 0; i < 6 && why.empty(); ++i) {
-            const double dl = m.calibrated.length_offset[i] - m.nominal.length_offset[i];
-            if (!(std::abs(dl) <= cap[i]))
-              why = "leg offset dl" + std::to_string(i + 1) + " = " + number(dl) + " above the correction bound " +
-                    number(cap[i]) + key_note("max_correction");
-          }
-          for (int i = 0; i < 6 && why.empty(); ++i) {
-            const double ds = m.calibrated.leg_offset_sq[i] - m.nominal.leg_offset_sq[i];
-            if (!(std::abs(ds) <= l.max_geometry_error * l.max_geometry_error))
-              why = "squared leg line offset dsq" + std::to_string(i + 1) + " = " + number(ds) + " mm2 above max_geometry_error^2 " +
-                    number(l.max_geometry_error * l.max_geometry_error) + key_note("max_geometry_error");
-          }
-        }
-        return why;
+        // The machine's own numbers: the family says which and against what.
+        return family.machine_limit_violation(any, l);
       },
       any);
+  return why;
 }
 
 namespace {

@@ -1,6 +1,8 @@
 #include "kincal/identify/parameters.hpp"
 
+#include <algorithm>
 #include <charconv>
+#include <utility>
 #include <cmath>
 #include <map>
 
@@ -75,13 +77,21 @@ ParameterSet read_parameters(const std::string& path, const Robot& robot,
 }
 
 Robot apply_parameters(const Robot& nominal, const ParameterSet& errors) {
-  Robot out = nominal;
+  // In the family's table order whatever the file's: an error that does not
+  // commute with another (the 6-RUS's shaft tilts, turned about the turned
+  // axes) composes as the family's model composes it.
+  const std::vector<ParameterSpec>& specs = parameter_specs(nominal);
+  std::vector<std::pair<std::size_t, double>> ordered;
   for (const ParameterValue& p : errors.values) {
     const ParameterSpec* s = find_spec(nominal, p.name);
     if (s == nullptr)
       throw InputError(errors.file, p.line, 0, "unknown parameter '" + p.name + "' for family " + nominal.family());
-    s->add(out, p.value);
+    ordered.emplace_back(std::size_t(s - specs.data()), p.value);
   }
+  std::stable_sort(ordered.begin(), ordered.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  Robot out = nominal;
+  for (const auto& [index, value] : ordered) specs[index].add(out, value);
   return out;
 }
 

@@ -16,7 +16,7 @@
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/files.hpp"
-#include "kincal/identify/hybrid_error_model.hpp"
+#include "families/family.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/version.hpp"
 
@@ -25,55 +25,32 @@ namespace kincal::identify {
 namespace {
 
 // Named groups of the canonical value list, in the order for_each_value
-// visits them (core/calibration_table.hpp). Only labels for the reader: the
-// count of every group is checked against table_value_count below, so a
-// change of the layout in core fails loudly here instead of mislabelling.
-using Groups = std::vector<std::pair<std::string, int>>;
-
-void add_stewart_geometry(Groups& g, const std::string& p) {
-  for (const auto& [name, n] : Groups{{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"leg_offset_sq", 6}, {"min_length", 6},
-                                      {"max_length", 6}, {"home_rotation", 9}, {"home_position", 3},
-                                      {"characteristic_length", 1}})
-    g.emplace_back(p + name, n);
-}
-
-void add_hybrid_geometry(Groups& g, const std::string& p) {
-  for (const auto& [name, n] :
-       Groups{{"base_joints", 9}, {"platform_joints", 9}, {"platform_to_wrist", 1}, {"wrist_link", 1},
-              {"tool_length", 1}, {"workpiece_rotation", 9}, {"workpiece_origin", 3}, {"tool_offset", 9},
-              {"joint_offset", 6}, {"min_joint", 6}, {"max_joint", 6}, {"min_extension", 1}, {"max_extension", 1},
-              {"home", 3}, {"characteristic_length", 1}})
-    g.emplace_back(p + name, n);
-}
+// visits them (core/calibration_table.hpp): the machine's from its family
+// (Family::machine_groups), then the effects and bounds every table has.
+// Only labels for the reader: their count is checked against
+// table_value_count below, so a change of the layout in core fails loudly
+// here instead of mislabelling.
+using Groups = std::vector<TableGroup>;
 
 void add_effects_and_bounds(Groups& g) {
-  for (const auto& [name, n] :
-       Groups{{"effects.scale", 6}, {"effects.backlash", 6}, {"effects.compliance", 6}, {"effects.cyclic_sin", 6},
-              {"effects.cyclic_cos", 6}, {"effects.thermal", 1}, {"effects.screw_lead", 1},
-              {"effects.screw_joints", 1}, {"effects.load_direction", 3}, {"effects.thermal_origin", 3},
-              {"effects.reference_temperature", 1}, {"effects.user", kUserEffectParameters}, {"bounds.max_correction", 6}, {"bounds.min_joint", 6},
-              {"bounds.max_joint", 6}})
-    g.emplace_back(name, n);
+  for (const auto& [name, n] : std::vector<std::pair<std::string, int>>{
+           {"effects.scale", 6}, {"effects.backlash", 6}, {"effects.compliance", 6}, {"effects.cyclic_sin", 6},
+           {"effects.cyclic_cos", 6}, {"effects.thermal", 1}, {"effects.screw_lead", 1},
+           {"effects.screw_joints", 1}, {"effects.load_direction", 3}, {"effects.thermal_origin", 3},
+           {"effects.reference_temperature", 1}, {"effects.user", kUserEffectParameters},
+           {"bounds.max_correction", 6}, {"bounds.min_joint", 6}, {"bounds.max_joint", 6}})
+    g.push_back({name, n, {}, {}});
 }
 
-template <class Machine> Groups groups() {
-  Groups g;
-  if constexpr (Machine::family == MachineFamily::Hybrid) {
-    add_hybrid_geometry(g, "machine.nominal.");
-    g.emplace_back("machine.up_split", 1);
-    g.emplace_back("machine.encoder_offsets", 6);
-    g.emplace_back("machine.source_errors", kHybridSourceErrorCount);
-  } else {
-    add_stewart_geometry(g, "machine.nominal.");
-    add_stewart_geometry(g, "machine.calibrated.");
-  }
+template <class Machine> Groups groups(const Robot& robot) {
+  Groups g = family_of(robot).machine_groups(robot);
   add_effects_and_bounds(g);
   int total = 0;
-  for (const auto& e : g) total += e.second;
+  for (const TableGroup& e : g) total += e.count;
   if (total != static_cast<int>(table_value_count<Machine>()))
     throw InputError("kincal table: the table layout of core/calibration_table.hpp changed (" +
                      std::to_string(table_value_count<Machine>()) + " values, the writer knows " +
-                     std::to_string(total) + "); update identify/src/io/table_writer.cpp");
+                     std::to_string(total) + "); update the family's machine_groups (identify/src/families/)");
   return g;
 }
 
@@ -115,21 +92,21 @@ void emit_limits(std::ostream& out, const MachineLimits<Scalar>& l, const std::s
 // One table as a value array, a CRC constant and the constexpr table.
 template <class Machine>
 void emit_table(std::ostream& out, const CalibrationTable<Machine>& t, const std::string& name, const std::string& scalar,
-                const std::vector<std::string>& source_error_names) {
+                const Groups& g) {
   const std::size_t n = table_value_count<Machine>();
   std::vector<double> values(n);
   table_to_values(t, values.data());
-  const Groups g = groups<Machine>();
   out << "inline constexpr double k" << name << "Values_" << scalar << "[" << n << "] = {\n";
   std::size_t k = 0;
-  for (const auto& [label, count] : g) {
-    if (label == "machine.source_errors") {
-      out << "    // " << label << " (Δχ̂ of seed 000 Eq. (7), identify's HybridErrorModel order)\n";
+  for (const TableGroup& group : g) {
+    const int count = group.count;
+    if (!group.values.empty()) {  // one value per line, each named
+      out << "    // " << group.label << group.note << "\n";
       for (int i = 0; i < count; ++i, ++k)
-        out << "    " << number(values[k]) << ",  // " << source_error_names[static_cast<std::size_t>(i)] << "\n";
+        out << "    " << number(values[k]) << ",  // " << group.values[static_cast<std::size_t>(i)] << "\n";
       continue;
     }
-    out << "    // " << label << "\n    ";
+    out << "    // " << group.label << "\n    ";
     for (int i = 0; i < count; ++i, ++k) out << number(values[k]) << (i + 1 < count ? ", " : ",\n");
   }
   out << "};\n";
@@ -277,11 +254,7 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
     if (st != CompensationStatus::Ok)
       throw InputError(model_name, 0, 0,
                        std::string("the generated table fails its check (") + to_string(st) + ")");
-  std::vector<std::string> names;
-  if constexpr (Machine::family == MachineFamily::Hybrid) {
-    const HybridErrorModel em(model.nominal.hybrid());
-    for (const HybridErrorParameter& p : em.parameters()) names.push_back(p.name + " " + p.unit());
-  }
+  const Groups names = groups<Machine>(model.nominal);
   const std::string fam = Machine::family_name;
   std::ostringstream out;
   out << "// Generated from " << comment_safe(model_name) << " by kincal " << kVersion
@@ -300,7 +273,11 @@ std::string header_for(const CalibrationModel& model, const CalibrationTable<Mac
       << "#include <cstdint>\n\n"
       << "#include \"kincal/core/calibration_table.hpp\"\n"
       << "#include \"kincal/core/formula_effects.hpp\"\n"
-      << "#include \"kincal/core/machine_limits.hpp\"\n\n"
+      << "#include \"kincal/core/machine_limits.hpp\"\n"
+      << (std::string(Machine::header) != "kincal/core/calibration_table.hpp"
+              ? "#include \"" + std::string(Machine::header) + "\"\n"
+              : std::string())
+      << "\n"
       << "static_assert(::kincal::kCalibrationTableVersion == " << kCalibrationTableVersion
       << ",\n              \"generated for calibration table format version " << kCalibrationTableVersion
       << "; regenerate with this kincal\");\n\n"

@@ -60,6 +60,7 @@ inline constexpr std::uint32_t kCalibrationTableVersion = 4;  // 2: effects.user
 enum class MachineFamily : std::uint8_t {
   Stewart6Ups = 1,  // stewart-6ups (seed 001)
   Hybrid = 2,       // hybrid-3ups-up-3r (seed 000)
+  Rus6 = 3,         // rus6 (core/rus6_machine.hpp)
 };
 
 // Size of Δχ of the hybrid (seed 000 Eq. (7)): 6 encoder offsets + 144
@@ -195,7 +196,8 @@ template <class Scalar> struct TableBounds {
 // in the canonical order), `Rebind<Other>` (the same machine in another
 // scalar: table_cast), encoder_offset(i) (the coarse calibration's zero of
 // joint i, in joint units: the controller's drive registers) and its names
-// in C++ (`kincal table` writes them into the generated header). The
+// in C++ and the header that defines it (`kincal table` writes them into
+// the generated header). The
 // compensator's half of a family is compensation_detail::Model<Machine>.
 template <class S> struct StewartMachine {
   using Scalar = S;
@@ -203,6 +205,7 @@ template <class S> struct StewartMachine {
   static constexpr MachineFamily family = MachineFamily::Stewart6Ups;
   static constexpr const char* type_name = "StewartMachine";
   static constexpr const char* family_name = "Stewart6Ups";
+  static constexpr const char* header = "kincal/core/calibration_table.hpp";  // what a generated table includes
   StewartGeometryTable<S> nominal;     // nominal IK: the reference of the correction bound
   StewartGeometryTable<S> calibrated;  // seed 001: IK of this geometry is the compensation
 
@@ -221,6 +224,7 @@ template <class S> struct HybridMachine {
   static constexpr MachineFamily family = MachineFamily::Hybrid;
   static constexpr const char* type_name = "HybridMachine";
   static constexpr const char* family_name = "Hybrid";
+  static constexpr const char* header = "kincal/core/calibration_table.hpp";  // what a generated table includes
   HybridGeometryTable<S> nominal;  // the nominal machine (B is evaluated on it)
   S up_split;                      // e = |A44 A64|, mm (seed 000 Table 1: 345)
   S encoder_offsets[6];            // ξ̂, added to nominal.joint_offset in the IK
@@ -399,11 +403,19 @@ template <class Scalar> constexpr bool values_ok(const HybridGeometryTable<Scala
          g.min_extension < g.max_extension && ordered(g.min_joint, g.max_joint);
 }
 
-template <class Scalar> constexpr bool values_ok(const StewartMachine<Scalar>& m, const TableBounds<Scalar>&) {
+}  // namespace table_detail
+
+// A machine's own values check (validate_table's TableValues), one overload
+// per family beside its machine type, found by argument-dependent lookup: a
+// family's header (core/rus6_machine.hpp) adds its own without touching this
+// file.
+template <class Scalar> constexpr bool machine_values_ok(const StewartMachine<Scalar>& m, const TableBounds<Scalar>&) {
+  using table_detail::values_ok;
   return values_ok(m.nominal) && values_ok(m.calibrated);
 }
 
-template <class Scalar> constexpr bool values_ok(const HybridMachine<Scalar>& m, const TableBounds<Scalar>& b) {
+template <class Scalar> constexpr bool machine_values_ok(const HybridMachine<Scalar>& m, const TableBounds<Scalar>& b) {
+  using namespace table_detail;
   if (!values_ok(m.nominal) || !(m.up_split > Scalar(0))) return false;
   for (int i = 0; i < 6; ++i) {
     // The encoder offsets live in encoder_offsets only (no double count in B·Δχ).
@@ -414,6 +426,8 @@ template <class Scalar> constexpr bool values_ok(const HybridMachine<Scalar>& m,
   }
   return true;
 }
+
+namespace table_detail {
 
 template <class Scalar> constexpr bool values_ok(const EffectTable<Scalar>& e) {
   const Scalar mask = e.screw_joints;
@@ -448,7 +462,7 @@ template <class Machine> constexpr CompensationStatus validate_table(const Calib
   for_each_value(t, [&finite](const Scalar& x) { finite = finite && table_detail::finite(x); });
   if (!finite) return CompensationStatus::TableValues;
   if (!table_detail::values_ok(t.bounds) || !table_detail::values_ok(t.effects) ||
-      !table_detail::values_ok(t.machine, t.bounds))
+      !machine_values_ok(t.machine, t.bounds))
     return CompensationStatus::TableValues;
   return CompensationStatus::Ok;
 }

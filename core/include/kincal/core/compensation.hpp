@@ -184,6 +184,29 @@ namespace compensation_detail {
 // (formula_effects.hpp); a family that takes it elsewhere says so.
 template <class Machine> struct Model;
 
+// Step 2's static loads for a family whose nominal IK gives J = ∂q/∂twist
+// at the platform origin (6-UPS, 6-RUS): J_ikᵀ·τ = wrench, as identify's
+// nodes. The load of a unit weight along g at the origin (if need_load), and
+// the payload's: force F = w·g and moment r × F, r the centre of mass in the
+// base frame (written out by component: Eigen's vectorized cross of two
+// float Vec3 reads 16 bytes of a 12-byte vector, GCC 12's -Warray-bounds on
+// x86). Singular where J_ik cannot carry the wrench.
+template <bool kPayload, class S>
+Status ik_jacobian_loads(const Mat6<S>& J, const Pose<S>& pose, bool need_load, const Vec3<S>& g, Vec6<S>& load,
+                         [[maybe_unused]] S payload_weight, [[maybe_unused]] const Vec3<S>& payload_com,
+                         [[maybe_unused]] Vec6<S>* payload_load) {
+  if (need_load && !static_load_inverse(J, g, load)) return Status::Singular;
+  if constexpr (kPayload) {
+    const S w = payload_weight;
+    const Vec3<S> r = pose.R * payload_com;
+    Vec6<S> wrench;
+    wrench << w * g(0), w * g(1), w * g(2), w * (r(1) * g(2) - r(2) * g(1)), w * (r(2) * g(0) - r(0) * g(2)),
+        w * (r(0) * g(1) - r(1) * g(0));
+    if (!static_load_of_wrench(J, wrench, *payload_load)) return Status::Singular;
+  }
+  return Status::Ok;
+}
+
 template <class S> struct Model<StewartMachine<S>> {
   StewartGeometry<S> nominal;
   StewartGeometry<S> calibrated;
@@ -198,25 +221,11 @@ template <class S> struct Model<StewartMachine<S>> {
   // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
   template <bool kPayload>
   Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
-                               [[maybe_unused]] S payload_weight, [[maybe_unused]] const Vec3<S>& payload_com,
-                               [[maybe_unused]] Vec6<S>* payload_load) const {
+                               S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load) const {
     Mat6<S> J;
     const Status s = stewart_ik(nominal, pose, nominal_q, &J);
     if (s != Status::Ok) return s;
-    if (need_load && !static_load_inverse(J, g, load)) return Status::Singular;
-    if constexpr (kPayload) {
-      // The payload's wrench at the platform origin: force F = w·g and
-      // moment r × F, r the centre of mass in the base frame. Written out
-      // by component: Eigen's vectorized cross of two float Vec3 reads 16
-      // bytes of a 12-byte vector (GCC 12's -Warray-bounds on x86).
-      const S w = payload_weight;
-      const Vec3<S> r = pose.R * payload_com;
-      Vec6<S> wrench;
-      wrench << w * g(0), w * g(1), w * g(2), w * (r(1) * g(2) - r(2) * g(1)), w * (r(2) * g(0) - r(0) * g(2)),
-          w * (r(0) * g(1) - r(1) * g(0));
-      if (!static_load_of_wrench(J, wrench, *payload_load)) return Status::Singular;
-    }
-    return Status::Ok;
+    return ik_jacobian_loads<kPayload>(J, pose, need_load, g, load, payload_weight, payload_com, payload_load);
   }
 
   // seed 001: the IK of the calibrated geometry is the compensation; there

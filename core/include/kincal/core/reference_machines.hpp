@@ -92,6 +92,9 @@ struct Rus6RefDimensions {
   // the ±40 mm / ±10° box about home θ spans −73.9°…+61.3°; the other IK
   // branch stays beyond ±105° there.
   static constexpr double min_joint_deg = -80.0, max_joint_deg = 70.0;
+  // Each motor drives its crank through a 10:1 gearbox: the `cyclic`
+  // effect's period (one motor revolution) is 2π/10 rad of crank.
+  static constexpr double cyclic_period = 2.0 * 3.14159265358979323846 / 10.0;
 };
 
 // `rus6-ref`. Motor pairs centred at 0°, 120°, 240° about z; each shaft is

@@ -20,6 +20,7 @@
 #include "kincal/core/calibration_table.hpp"
 #include "kincal/core/machine_limits.hpp"
 #include "kincal/core/pose.hpp"
+#include "kincal/core/rus6_machine.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
 
@@ -32,7 +33,10 @@ struct CalibrationTableOptions {
   std::optional<Vec6<double>> max_correction;
 };
 
-using AnyCalibrationTable = std::variant<StewartCalibrationTable<double>, HybridCalibrationTable<double>>;
+// One alternative per family (its machine type's table): the registry line
+// of this layer.
+using AnyCalibrationTable =
+    std::variant<StewartCalibrationTable<double>, HybridCalibrationTable<double>, Rus6CalibrationTable<double>>;
 
 // The machine limits of a robot description (core/machine_limits.hpp): its
 // stroke / joint limits as the drives' range, the correction bound (options,
@@ -48,7 +52,7 @@ MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableO
 // ("machine.source_errors[37] = 0.15 rad above max_angle_error 0.1 (robot
 // description key 'max_angle_error')"), or "" if validate_table(table,
 // limits) is Ok or fails for another reason.
-std::string limit_violation(const AnyCalibrationTable& table, const MachineLimits<double>& limits);
+std::string limit_violation(const Robot& robot, const AnyCalibrationTable& table, const MachineLimits<double>& limits);
 
 // Sealed (CRC set) tables that pass validate_table against machine_limits of
 // the model's robot. Throw InputError for a

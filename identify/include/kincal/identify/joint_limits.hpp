@@ -21,6 +21,9 @@ namespace kincal::identify {
 // physical floor of 0). Everything else is unchanged.
 StewartGeometry<double> without_limits(StewartGeometry<double> g);
 HybridGeometry<double> without_limits(HybridGeometry<double> g);
+// The 6-RUS's limits also pick the IK branch (core/rus6.hpp): opened to the
+// one-turn window about their middle, where the home branch decides.
+Rus6Geometry<double> without_limits(Rus6Geometry<double> g);
 // The robot for modelling measured rows. MODEL.json and the tables keep the
 // robot as the file gives it.
 Robot without_limits(Robot robot);

@@ -14,6 +14,7 @@
 
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/pose.hpp"
+#include "kincal/core/rus6.hpp"
 #include "kincal/core/status.hpp"
 #include "kincal/core/stewart.hpp"
 
@@ -23,6 +24,7 @@ class FormulaCandidate;  // effects/formula_candidate.hpp
 
 inline constexpr const char* kStewartFamily = "stewart-6ups";
 inline constexpr const char* kHybridFamily = "hybrid-3ups-up-3r";
+inline constexpr const char* kRus6Family = "rus6";
 
 // The design inputs of a hybrid machine from which HybridGeometry's derived
 // members (workpiece frame, tool offset, home) follow, exactly as core's
@@ -50,8 +52,11 @@ HybridDesign hybrid_design_of(const HybridGeometry<double>& g);
 
 struct Robot {
   std::string name;
-  std::variant<StewartGeometry<double>, HybridGeometry<double>> geometry;
-  double screw_lead = 5.0;     // mm per revolution, for the `cyclic` effect (GUIDE)
+  // One alternative per family (the registry line of this layer).
+  std::variant<StewartGeometry<double>, HybridGeometry<double>, Rus6Geometry<double>> geometry;
+  // The `cyclic` effect's period in joint units (GUIDE): a screw's lead, mm
+  // per revolution; the 6-RUS's crank angle per motor revolution, rad.
+  double screw_lead = 5.0;
   double gauge_radius = 0.0;   // |P0 Pj| of the three-target gauge (hybrid only), mm
   // Hybrid only: seed 000's joint/link source errors Δχ (150, in the order of
   // HybridErrorModel, identify/hybrid_error_model.hpp), set from PARAMS.csv.
@@ -106,6 +111,9 @@ struct Robot {
   StewartGeometry<double>& stewart() { return std::get<StewartGeometry<double>>(geometry); }
   const HybridGeometry<double>& hybrid() const { return std::get<HybridGeometry<double>>(geometry); }
   HybridGeometry<double>& hybrid() { return std::get<HybridGeometry<double>>(geometry); }
+  bool is_rus6() const { return std::holds_alternative<Rus6Geometry<double>>(geometry); }
+  const Rus6Geometry<double>& rus6() const { return std::get<Rus6Geometry<double>>(geometry); }
+  Rus6Geometry<double>& rus6() { return std::get<Rus6Geometry<double>>(geometry); }
 
   // What the robot's family answers (identify/src/families/family.hpp; the
   // switches on is_stewart()/is_hybrid() belong inside a family's folder).
@@ -133,7 +141,7 @@ struct Robot {
   Status inverse(const Pose<double>& pose, Vec6<double>& q) const;
 };
 
-// Built-in names: "stewart-seed001", "hybrid-seed000". Anything else is read as
+// Built-in names: "stewart-seed001", "hybrid-seed000", "rus6-ref". Anything else is read as
 // a robot description file. Throws InputError (with file:line:column for
 // files) on any problem.
 Robot load_robot(const std::string& name_or_path);

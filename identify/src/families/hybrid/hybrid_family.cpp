@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "families/description_reader.hpp"
+#include "families/table_words.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/hybrid.hpp"
 #include "kincal/core/reference_machines.hpp"
@@ -288,6 +289,52 @@ AnyCalibrationTable HybridFamily::machine_table(const CalibrationModel& model) c
     t.machine.source_errors[k] = c.structural.size() > 0 ? c.structural(k) : 0.0;
   t.bounds = kincal::default_bounds(c.nominal);
   return t;
+}
+
+std::vector<TableGroup> HybridFamily::machine_groups(const Robot& robot) const {
+  std::vector<TableGroup> g;
+  for (const auto& [name, n] :
+       {std::pair{"base_joints", 9}, {"platform_joints", 9}, {"platform_to_wrist", 1}, {"wrist_link", 1},
+        {"tool_length", 1}, {"workpiece_rotation", 9}, {"workpiece_origin", 3}, {"tool_offset", 9},
+        {"joint_offset", 6}, {"min_joint", 6}, {"max_joint", 6}, {"min_extension", 1}, {"max_extension", 1},
+        {"home", 3}, {"characteristic_length", 1}})
+    g.push_back({"machine.nominal." + std::string(name), n, {}, {}});
+  g.push_back({"machine.up_split", 1, {}, {}});
+  g.push_back({"machine.encoder_offsets", 6, {}, {}});
+  TableGroup source{"machine.source_errors", kHybridSourceErrorCount, {},
+                    " (Δχ̂ of seed 000 Eq. (7), identify's HybridErrorModel order)"};
+  const HybridErrorModel em(robot.hybrid());
+  for (const HybridErrorParameter& p : em.parameters()) source.values.push_back(p.name + " " + p.unit());
+  g.push_back(std::move(source));
+  return g;
+}
+
+// The source errors, each against its own cap: the angles against
+// max_angle_error, the lengths against max_geometry_error (as core's
+// machine_inside).
+std::string HybridFamily::machine_limit_violation(const AnyCalibrationTable& table,
+                                                  const MachineLimits<double>& l) const {
+  const double(&values)[kHybridSourceErrorCount] = std::get<HybridCalibrationTable<double>>(table).machine.source_errors;
+  for (int k = 0; k < kHybridSourceErrorCount; ++k) {
+    const bool angle = HybridErrorLayout::angular(k);
+    const double cap = angle ? l.max_angle_error : l.max_geometry_error;
+    const char* key = angle ? "max_angle_error" : "max_geometry_error";
+    if (!(std::abs(values[k]) <= cap))
+      return "machine.source_errors[" + std::to_string(k) + "] = " + detail::table_number(values[k]) +
+             (angle ? " rad" : " mm") + " above " + key + " " + detail::table_number(cap) + detail::key_note(key);
+  }
+  return {};
+}
+
+// The encoder offsets: one correction at every point.
+std::string HybridFamily::machine_value_violation(const AnyCalibrationTable& table) const {
+  const HybridCalibrationTable<double>& t = std::get<HybridCalibrationTable<double>>(table);
+  for (int i = 0; i < 6; ++i)
+    if (!(std::abs(t.machine.encoder_offsets[i]) <= t.bounds.max_correction[i]))
+      return "encoder offset " + std::to_string(i + 1) + " = " + detail::table_number(t.machine.encoder_offsets[i]) +
+             " above its correction bound " + detail::table_number(t.bounds.max_correction[i]) +
+             detail::key_note("max_correction");
+  return {};
 }
 
 std::string HybridFamily::missing_measurement(const Robot& robot, const PoseTable& data) const {

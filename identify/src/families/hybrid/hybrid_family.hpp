@@ -49,6 +49,11 @@ class HybridFamily final : public Family {
                                                            double ridge_k) const override;  // hybrid_base_fit.cpp
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
+  const char* joint_range_key() const override { return "joint_limits"; }
+  std::vector<TableGroup> machine_groups(const Robot& robot) const override;
+  std::string machine_limit_violation(const AnyCalibrationTable& table,
+                                      const MachineLimits<double>& limits) const override;
+  std::string machine_value_violation(const AnyCalibrationTable& table) const override;
 
   // The gauge's columns, where the description names no targets of its own
   // (full poses alone go to the target fit's full-pose reading).

@@ -1,6 +1,7 @@
 #include "families/stewart/stewart_family.hpp"
 
 #include "families/description_reader.hpp"
+#include "families/table_words.hpp"
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/stewart.hpp"
 #include "kincal/identify/stewart_calibration.hpp"
@@ -171,6 +172,44 @@ AnyCalibrationTable StewartFamily::machine_table(const CalibrationModel& model) 
   t.machine.calibrated = to_table(calibrated_robot(model).stewart());  // seed 001: IK of the calibrated geometry
   t.bounds = kincal::default_bounds(nominal);
   return t;
+}
+
+std::vector<TableGroup> StewartFamily::machine_groups(const Robot&) const {
+  std::vector<TableGroup> g;
+  for (const char* part : {"machine.nominal.", "machine.calibrated."})
+    for (const auto& [name, n] : {std::pair{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"leg_offset_sq", 6},
+                                  {"min_length", 6}, {"max_length", 6}, {"home_rotation", 9}, {"home_position", 3},
+                                  {"characteristic_length", 1}})
+      g.push_back({part + std::string(name), n, {}, {}});
+  return g;
+}
+
+std::string StewartFamily::machine_limit_violation(const AnyCalibrationTable& table,
+                                                   const MachineLimits<double>& l) const {
+  using detail::first_above;
+  using detail::key_note;
+  using detail::table_number;
+  const StewartMachine<double>& m = std::get<StewartCalibrationTable<double>>(table).machine;
+  const double* cap = std::get<StewartCalibrationTable<double>>(table).bounds.max_correction;
+  std::string why = first_above("machine.calibrated.base - nominal", m.calibrated.base, l.max_geometry_error,
+                                "max_geometry_error", m.nominal.base);
+  if (why.empty())
+    why = first_above("machine.calibrated.platform - nominal", m.calibrated.platform, l.max_geometry_error,
+                      "max_geometry_error", m.nominal.platform);
+  for (int i = 0; i < 6 && why.empty(); ++i) {
+    const double dl = m.calibrated.length_offset[i] - m.nominal.length_offset[i];
+    if (!(std::abs(dl) <= cap[i]))
+      why = "leg offset dl" + std::to_string(i + 1) + " = " + table_number(dl) + " above the correction bound " +
+            table_number(cap[i]) + key_note("max_correction");
+  }
+  for (int i = 0; i < 6 && why.empty(); ++i) {
+    const double ds = m.calibrated.leg_offset_sq[i] - m.nominal.leg_offset_sq[i];
+    if (!(std::abs(ds) <= l.max_geometry_error * l.max_geometry_error))
+      why = "squared leg line offset dsq" + std::to_string(i + 1) + " = " + table_number(ds) +
+            " mm2 above max_geometry_error^2 " + table_number(l.max_geometry_error * l.max_geometry_error) +
+            key_note("max_geometry_error");
+  }
+  return why;
 }
 
 std::unique_ptr<ActualMachine> StewartFamily::actual_machine(const Robot& nominal, const Robot& actual) const {

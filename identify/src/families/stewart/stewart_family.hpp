@@ -38,6 +38,10 @@ class StewartFamily final : public Family {
   Eigen::Index outlier_min_nodes() const override { return 8; }
 
   AnyCalibrationTable machine_table(const CalibrationModel& model) const override;
+  const char* joint_range_key() const override { return "stroke"; }
+  std::vector<TableGroup> machine_groups(const Robot& robot) const override;
+  std::string machine_limit_violation(const AnyCalibrationTable& table,
+                                      const MachineLimits<double>& limits) const override;
 
   bool reads_own_measurement(const Robot&, const PoseTable& data) const override { return data.has_measured; }
   std::string missing_measurement(const Robot&, const PoseTable& data) const override {
