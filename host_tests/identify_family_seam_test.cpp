@@ -14,8 +14,10 @@
 //   differences of the family's nonlinear pose at the commands core's
 //   effect_joint_error moves, in double; with the five built-ins and a user
 //   effect nonlinear in q that this test writes and registers itself.
-// Robots: the two built-ins and a hexapod of another size (legs 0.6–1.1 m),
-// at home and at poses drawn at random around it (not a grid).
+// Robots: the three built-ins, a hexapod of another size (legs 0.6–1.1 m)
+// and a 6-RUS of another size and layout from a description file
+// (large_rus6.hpp), at home and at poses drawn at random around it (not a
+// grid).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,6 +30,7 @@
 #include "../identify/src/families/family.hpp"
 #include "../identify/src/families/family_errors.hpp"
 #include "kincal/core/effects.hpp"
+#include "large_rus6.hpp"
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/joint_limits.hpp"
@@ -44,7 +47,9 @@ using kincal::Vec6;
 namespace {
 
 ki::Robot robot_named(const std::string& name) {
-  return name == "large-hexapod" ? kincal_test::large_hexapod() : ki::builtin_robot(name);
+  if (name == "large-hexapod") return kincal_test::large_hexapod();
+  if (name == "large-rus6") return kincal_test::large_rus6();
+  return ki::builtin_robot(name);
 }
 
 // Poses around home the nominal IK reaches within the limits: random
@@ -317,7 +322,8 @@ TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
 }
 
 INSTANTIATE_TEST_SUITE_P(RegisteredFamilies, FamilySeam,
-                         ::testing::Values("stewart-seed001", "hybrid-seed000", "large-hexapod"),
+                         ::testing::Values("stewart-seed001", "hybrid-seed000", "large-hexapod", "rus6-ref",
+                                           "large-rus6"),
                          [](const ::testing::TestParamInfo<std::string>& param) {
                            std::string n = param.param;
                            std::replace(n.begin(), n.end(), '-', '_');

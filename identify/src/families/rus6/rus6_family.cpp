@@ -19,6 +19,13 @@ Vec6<double> per_leg_length(const detail::DescriptionReader& r, const nlohmann::
   return r.per_joint_positive(j, path);
 }
 
+// Unit to the last digits where a hand-written file rounded (6 digits), so
+// the kinematics' rules hold exactly; a vector already unit to 1e-12 (as
+// this tool writes it) is kept as it is, so a description round-trips.
+Vec3<double> tidy(const Vec3<double>& v) {
+  return std::abs(v.norm() - 1.0) < 1e-12 ? v : Vec3<double>(v.normalized());
+}
+
 nlohmann::json per_leg_json(const Vec6<double>& v) {
   if ((v.array() == v(0)).all()) return v(0) + 0.0;
   return detail::vector_json<6>(v);
@@ -44,7 +51,7 @@ Robot Rus6Family::parse(const nlohmann::json& doc, const detail::DescriptionRead
     g.shaft_points.col(i) = r.vector<3>(m["point"], at + "/point");
     const Vec3<double> a = r.vector<3>(m["axis"], at + "/axis");
     if (!(std::abs(a.norm() - 1.0) < 1e-6)) r.fail(at + "/axis", "'axis' must be a unit vector (|axis| = " + std::to_string(a.norm()) + ")");
-    g.shaft_axes.col(i) = a.normalized();
+    g.shaft_axes.col(i) = tidy(a);
   }
   const Eigen::Matrix<double, 3, 6> zero = r.points<6>(doc["crank_zero"], "/crank_zero");
   for (int i = 0; i < 6; ++i) {
@@ -54,10 +61,8 @@ Robot Rus6Family::parse(const nlohmann::json& doc, const detail::DescriptionRead
     if (!(std::abs(z.dot(g.shaft_axes.col(i))) < 1e-6))
       r.fail(at, "'crank_zero' " + std::to_string(i + 1) + " must be perpendicular to its motor's axis (z . axis = " +
                      std::to_string(z.dot(g.shaft_axes.col(i))) + ")");
-    // Exactly unit and perpendicular (a hand-written file rounds): the
-    // kinematics' rules hold to the last digit.
     const Vec3<double> a = g.shaft_axes.col(i);
-    g.crank_zero.col(i) = (z - a * a.dot(z)).normalized();
+    g.crank_zero.col(i) = tidy(std::abs(a.dot(z)) < 1e-12 ? z : Vec3<double>(z - a * a.dot(z)));
   }
   g.crank_length = per_leg_length(r, doc["crank_length"], "/crank_length");
   g.rod_length = per_leg_length(r, doc["rod_length"], "/rod_length");
