@@ -72,6 +72,16 @@ echo "   hybrid-seed000, 3 layers x 49 poses (layer 2 held out), gauge with 5 um
 whole_loop main_hybrid hybrid-seed000 examples/hybrid-seed000/errors.csv "cyclic:a1=0.004" \
   examples/hybrid-seed000/diagnosis_poses.csv 'L2-' "seed 000" 5 --noise-mm 0.005
 
+# The 6-RUS (rotary motors, cranks, rods; rus6-ref): an assembled machine's
+# errors (examples/rus6/errors.csv: shafts placed to 30 um and tilted 0.3
+# mrad, cranks zeroed to 1 mrad) AND lost motion in the gearboxes of motors
+# 1 and 4 (0.10 and 0.15 mrad), measured as full poses by the tracker.
+echo
+echo "== main job on the 6-RUS: simulate -> identify -> diagnose -> add the effect -> compensate -> report"
+echo "   rus6-ref, 100 random poses in its +-40 mm / +-10 deg box (70 cal, 30 held out), 2 um / 5 urad, one hidden effect"
+whole_loop main_rus6 rus6-ref examples/rus6/errors.csv "backlash:b1=1e-4,b4=-1.5e-4" \
+  examples/rus6/diagnosis_poses.csv 'T[0-9]+' "66-parameter" 2 --noise-mm 0.002 --noise-rad 0.000005
+
 # An effect the library does not have, added by the user as a formula in the
 # robot description (docs/effects.md): legs 1 and 2 expand with temperature,
 # each by its own coefficient (not `thermal`'s uniform expansion).

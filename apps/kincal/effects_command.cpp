@@ -45,8 +45,12 @@ int run_effects(const EffectsArgs& a) {
     std::cout << out.dump(2) << "\n";
     return 0;
   }
-  std::cout << "effects for robot " << robot.name << " (screw lead " << frame.screw_lead
-            << " mm; set one with --effect NAME:PARAM=VALUE in simulate, name them in identify/diagnose --effects)\n";
+  // The cyclic effect's period in the joints' unit: a screw's lead (mm), or
+  // a rotary motor's period at its joint (rad, the 6-RUS).
+  const bool rotary = robot.revolute(0);
+  std::cout << "effects for robot " << robot.name << " (" << (rotary ? "cyclic period " : "screw lead ")
+            << frame.screw_lead << (rotary ? " rad" : " mm")
+            << "; set one with --effect NAME:PARAM=VALUE in simulate, name them in identify/diagnose --effects)\n";
   for (const nlohmann::json& e : list) {
     std::cout << "\n" << e["name"].get<std::string>() << ": " << e["description"].get<std::string>()
               << "\n  parameters:";

@@ -78,7 +78,8 @@ class CyclicEffect final : public JointSpaceEffect {
  public:
   std::string name() const override { return "cyclic"; }
   std::string description() const override {
-    return "periodic screw error a_i sin(2 pi q_i / p) + b_i cos(2 pi q_i / p), p = screw lead";
+    return "periodic screw error a_i sin(2 pi q_i / p) + b_i cos(2 pi q_i / p), p = screw lead (a rotary motor: "
+           "its period at the joint, rad)";
   }
   std::vector<std::string> parameter_names(const Robot& robot) const override {
     std::vector<std::string> out = numbered("a", screw_joint_count(robot));
