@@ -124,7 +124,7 @@ template <class Machine, std::size_t In = 4, std::size_t Out = 4, class Formulas
   std::vector<Cycle> cycles;
 
   Rig(const Table& cal, const Table& nom) : calibration(&cal), nominal(&nom), limits(limits_from_bounds(nom.bounds)) {
-    if constexpr (Machine::family == MachineFamily::Hybrid) config.scaling = EncoderOffsetScaling<double>::hybrid_default();
+    config.scaling = EncoderOffsetScaling<double>::of<Machine>();
   }
 
   // Runs the points through: each period the producer pushes `per_period`

@@ -18,6 +18,7 @@
 
 #include "kincal/core/compensation.hpp"
 #include "kincal/core/reference_machines.hpp"
+#include "kincal/core/rus6_machine.hpp"
 #include "kincal/port/controller.hpp"
 #include "kincal/port/emulator/encoder_registers.hpp"
 #include "kincal/port/emulator/nc_stream.hpp"
@@ -51,7 +52,7 @@ template <class Machine> void run_without_heap(const CalibrationTable<Machine>& 
   regs = emulator::EncoderRegisters();
   stream = emulator::NcStream<Scalar, 4, 4>();
   ControllerConfig<Scalar> config;
-  if constexpr (Machine::family == MachineFamily::Hybrid) config.scaling = EncoderOffsetScaling<Scalar>::hybrid_default();
+  config.scaling = EncoderOffsetScaling<Scalar>::template of<Machine>();
   constexpr int kPoints = 200;
   static JointCommand<Scalar> out[kPoints];
   int n_out = 0;
@@ -116,5 +117,27 @@ TEST(PortNoMalloc, StewartControllerLoopInFloat) {
   span << 20, 20, 10, 0.03, 0.03, 0.05;
   run_without_heap(table, nominal, centre, span);
 }
+
+// The 6-RUS's compensator (core/rus6_machine.hpp: the calibrated geometry's
+// closed-form IK), in double and float, through the same controller.
+template <class S> void run_rus6_without_heap() {
+  static const Rus6CalibrationTable<S> nominal = nominal_table(make_rus6_ref<S>());
+  static const Rus6CalibrationTable<S> table = [] {
+    Rus6CalibrationTable<S> t = nominal;
+    for (int i = 0; i < 6; ++i) {
+      t.machine.calibrated.joint_offset[i] = S(2e-3);
+      t.machine.calibrated.rod_length[i] += S(0.05);
+      t.machine.calibrated.shaft_points[3 * i + 2] += S(0.03);
+    }
+    return seal_table(t);
+  }();
+  Vec6<double> centre, span;
+  centre << 0, 0, 274, 0, 0, 0;
+  span << 30, 30, 30, 0.1, 0.1, 0.1;
+  run_without_heap(table, nominal, centre, span);
+}
+
+TEST(PortNoMalloc, Rus6ControllerLoop) { run_rus6_without_heap<double>(); }
+TEST(PortNoMalloc, Rus6ControllerLoopInFloat) { run_rus6_without_heap<float>(); }
 
 }  // namespace

@@ -55,10 +55,9 @@ using Controller = kp::Controller<Machine, Registers, Stream, Formulas>;
 // The drives' register file (a RAM block under qemu).
 volatile kp::baremetal::EncoderRegisterBlock g_drive_registers;
 
-// Register counts: 1 nm for the legs, 10 nrad for the wrist (in flash).
-constexpr kp::EncoderOffsetScaling<Scalar> kScaling = kincal::generated::kFamily == kincal::MachineFamily::Hybrid
-                                                          ? kp::EncoderOffsetScaling<Scalar>::hybrid_default()
-                                                          : kp::EncoderOffsetScaling<Scalar>::prismatic();
+// Register counts: 1 nm per prismatic joint, 10 nrad per revolute one, as
+// the machine's type says (in flash).
+constexpr kp::EncoderOffsetScaling<Scalar> kScaling = kp::EncoderOffsetScaling<Scalar>::of<Machine>();
 
 kp::ControllerConfig<Scalar> make_config() {
   kp::ControllerConfig<Scalar> c;

@@ -197,7 +197,8 @@ template <class Scalar> struct TableBounds {
 // scalar: table_cast), encoder_offset(i) (the coarse calibration's zero of
 // joint i, in joint units: the controller's drive registers) and its names
 // in C++ and the header that defines it (`kincal table` writes them into
-// the generated header). The
+// the generated header), revolute(i) (joint i in rad rather than mm: the
+// drives' register scaling). The
 // compensator's half of a family is compensation_detail::Model<Machine>.
 template <class S> struct StewartMachine {
   using Scalar = S;
@@ -206,6 +207,7 @@ template <class S> struct StewartMachine {
   static constexpr const char* type_name = "StewartMachine";
   static constexpr const char* family_name = "Stewart6Ups";
   static constexpr const char* header = "kincal/core/calibration_table.hpp";  // what a generated table includes
+  static constexpr bool revolute(int) { return false; }  // six legs, mm
   StewartGeometryTable<S> nominal;     // nominal IK: the reference of the correction bound
   StewartGeometryTable<S> calibrated;  // seed 001: IK of this geometry is the compensation
 
@@ -225,6 +227,7 @@ template <class S> struct HybridMachine {
   static constexpr const char* type_name = "HybridMachine";
   static constexpr const char* family_name = "Hybrid";
   static constexpr const char* header = "kincal/core/calibration_table.hpp";  // what a generated table includes
+  static constexpr bool revolute(int i) { return i >= 3; }  // three UPS legs (mm), the wrist (rad)
   HybridGeometryTable<S> nominal;  // the nominal machine (B is evaluated on it)
   S up_split;                      // e = |A44 A64|, mm (seed 000 Table 1: 345)
   S encoder_offsets[6];            // ξ̂, added to nominal.joint_offset in the IK

@@ -63,6 +63,7 @@ template <class S> struct Rus6Machine {
   static constexpr const char* type_name = "Rus6Machine";
   static constexpr const char* family_name = "Rus6";
   static constexpr const char* header = "kincal/core/rus6_machine.hpp";  // what a generated table includes
+  static constexpr bool revolute(int) { return true; }  // six cranks, rad
   Rus6GeometryTable<S> nominal;     // nominal IK: the reference of the correction bound
   Rus6GeometryTable<S> calibrated;  // the identified geometry: its IK is the compensation
 

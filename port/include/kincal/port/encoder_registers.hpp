@@ -71,6 +71,13 @@ template <class Scalar> struct EncoderOffsetScaling {
     for (int i = 3; i < kEncoderChannels; ++i) s.resolution[i] = Scalar(1e-8);
     return s;
   }
+  // A machine's joints as its type says (Machine::revolute): 1 nm per count
+  // for a prismatic joint, 10 nrad for a revolute one.
+  template <class Machine> static constexpr EncoderOffsetScaling of() {
+    EncoderOffsetScaling s;
+    for (int i = 0; i < kEncoderChannels; ++i) s.resolution[i] = Machine::revolute(i) ? Scalar(1e-8) : Scalar(1e-6);
+    return s;
+  }
 
   // Nearest count; OutOfRange if the value is not finite or does not fit.
   PortStatus to_counts(int channel, Scalar offset, std::int32_t& counts) const {
