@@ -30,9 +30,9 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 namespace kincal {
 template struct Rus6Geometry<double>;
 template struct Rus6Geometry<float>;
-template Status rus6_ik<double>(const Rus6Geometry<double>&, const Pose<double>&, Vec6<double>&, Mat6<double>*,
+template Status rus6_ik<Rus6Geometry<double>, double>(const Rus6Geometry<double>&, const Pose<double>&, Vec6<double>&, Mat6<double>*,
                                 Rus6Legs<double>*);
-template Status rus6_ik<float>(const Rus6Geometry<float>&, const Pose<float>&, Vec6<float>&, Mat6<float>*,
+template Status rus6_ik<Rus6Geometry<float>, float>(const Rus6Geometry<float>&, const Pose<float>&, Vec6<float>&, Mat6<float>*,
                                Rus6Legs<float>*);
 template FkReport<double> rus6_fk<double>(const Rus6Geometry<double>&, const Vec6<double>&, const Pose<double>&,
                                           Pose<double>&, const FkOptions<double>&);

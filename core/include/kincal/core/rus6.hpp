@@ -128,11 +128,22 @@ template <class Scalar> bool rus6_valid_geometry(const Rus6Geometry<Scalar>& g) 
   return true;
 }
 
-// Crank tip C_i(θ) for the physical angle θ.
-template <class Scalar> Vec3<Scalar> rus6_crank_tip(const Rus6Geometry<Scalar>& g, int i, Scalar theta) {
-  const Vec3<Scalar> z = g.crank_zero.col(i);
-  const Vec3<Scalar> y = Vec3<Scalar>(g.shaft_axes.col(i)).cross(z);
-  return g.shaft_points.col(i) + g.crank_length(i) * (std::cos(theta) * z + std::sin(theta) * y);
+// The kinematics below take a Rus6Geometry or anything with its members
+// under the same names (G): a controller reads its table's numbers in place
+// through Eigen maps (core/rus6_machine.hpp's Rus6GeometryRef), so two
+// geometries need not be copied into its static RAM.
+
+// Crank tip C_i(θ) for the physical angle θ. By components, y_i = a_i × z_i
+// included: on a Cortex-M at -Os the Eigen expression kept 400 bytes of
+// temporaries on the controller's deepest stack path (under cos's argument
+// reduction).
+template <class G, class Scalar> Vec3<Scalar> rus6_crank_tip(const G& g, int i, Scalar theta) {
+  const Scalar c = std::cos(theta) * g.crank_length(i), s = std::sin(theta) * g.crank_length(i);
+  const Scalar ax = g.shaft_axes(0, i), ay = g.shaft_axes(1, i), az = g.shaft_axes(2, i);
+  const Scalar zx = g.crank_zero(0, i), zy = g.crank_zero(1, i), zz = g.crank_zero(2, i);
+  return Vec3<Scalar>(g.shaft_points(0, i) + c * zx + s * (ay * zz - az * zy),
+                      g.shaft_points(1, i) + c * zy + s * (az * zx - ax * zz),
+                      g.shaft_points(2, i) + c * zz + s * (ax * zy - ay * zx));
 }
 
 // What the Jacobians are built from, at one (pose, θ): the caller's scratch.
@@ -145,9 +156,8 @@ template <class Scalar> struct Rus6Legs {
 };
 
 // Legs at a pose and the physical angles θ. No checks: a building block.
-template <class Scalar>
-void rus6_legs_at(const Rus6Geometry<Scalar>& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta,
-                  Rus6Legs<Scalar>& legs) {
+template <class G, class Scalar>
+void rus6_legs_at(const G& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta, Rus6Legs<Scalar>& legs) {
   legs.arms = pose.R * g.platform_joints;
   for (int i = 0; i < 6; ++i) {
     legs.crank_tips.col(i) = rus6_crank_tip(g, i, theta(i));
@@ -197,7 +207,7 @@ template <class Scalar> Mat6<Scalar> rus6_jacobian(const Rus6Legs<Scalar>& legs)
 // Serial singularity: a lever below this fraction of its crank length (the
 // sine of the angle between rod and crank tangent) makes the command's
 // sensitivity to the pose unbounded.
-template <class Scalar> bool rus6_levers_regular(const Rus6Geometry<Scalar>& g, const Rus6Legs<Scalar>& legs) {
+template <class G, class Scalar> bool rus6_levers_regular(const G& g, const Rus6Legs<Scalar>& legs) {
   for (int i = 0; i < 6; ++i)
     if (!(std::abs(legs.levers(i)) > Tolerance<Scalar>::singular_pivot_ratio * g.crank_length(i))) return false;
   return true;
@@ -207,8 +217,8 @@ template <class Scalar> bool rus6_levers_regular(const Rus6Geometry<Scalar>& g, 
 // lever λ_i ≈ 0, where J⁻¹ loses rank) or a parallel one (K singular). K is
 // factorised with its angular columns scaled by 1/L (dimensionless, as the
 // 6-UPS's): K = K_s·S⁻¹, S = diag(1, 1, 1, 1/L, 1/L, 1/L); `lu` holds K_s.
-template <class Scalar>
-bool rus6_factor_regular(const Rus6Geometry<Scalar>& g, const Rus6Legs<Scalar>& legs, SmallLu<Scalar, 6>& lu) {
+template <class G, class Scalar>
+bool rus6_factor_regular(const G& g, const Rus6Legs<Scalar>& legs, SmallLu<Scalar, 6>& lu) {
   if (!rus6_levers_regular(g, legs)) return false;
   rus6_wrenches_into(lu.storage(), legs);
   lu.storage().template rightCols<3>() *= Scalar(1) / g.characteristic_length;
@@ -243,9 +253,9 @@ template <class Scalar> Scalar wrap_about(Scalar x, Scalar mid) {
 //                 closes), or, when the Jacobian is requested, a serial
 //                 (λ_i ≈ 0) or parallel (K singular) singularity
 //   OutOfLimits   neither branch of some leg inside [min_joint, max_joint]
-template <class Scalar>
-Status rus6_ik(const Rus6Geometry<Scalar>& g, const Pose<Scalar>& pose, Vec6<Scalar>& q,
-               NonDeducedT<Mat6<Scalar>>* jacobian = nullptr, NonDeducedT<Rus6Legs<Scalar>>* legs = nullptr) {
+template <class G, class Scalar>
+Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian = nullptr,
+               NonDeducedT<Rus6Legs<Scalar>>* legs = nullptr) {
   if (!pose.finite()) return Status::InvalidInput;
   Vec6<Scalar> cmd;
   for (int i = 0; i < 6; ++i) {

@@ -183,17 +183,51 @@ template <class Scalar> Rus6GeometryTable<Scalar> to_table(const Rus6Geometry<Sc
 
 // ---- the compensator's half ------------------------------------------------------
 
+// A table's geometry read in place: the members rus6.hpp's IK reads, as maps
+// over the table's arrays (a few pointers on the stack, where a copied
+// Rus6Geometry<double> is 976 bytes of static RAM per geometry, two of
+// which do not fit a 4 KiB controller beside its stream).
+template <class Scalar> struct Rus6GeometryRef {
+  using Points = Eigen::Map<const Eigen::Matrix<Scalar, 3, 6>>;
+  using Values = Eigen::Map<const Vec6<Scalar>>;
+  Points shaft_points, shaft_axes, crank_zero;
+  Values crank_length, rod_length;
+  Points platform_joints;
+  Values joint_offset, min_joint, max_joint, home_branch;
+  Scalar characteristic_length;
+
+  explicit Rus6GeometryRef(const Rus6GeometryTable<Scalar>& t)
+      : shaft_points(t.shaft_points),
+        shaft_axes(t.shaft_axes),
+        crank_zero(t.crank_zero),
+        crank_length(t.crank_length),
+        rod_length(t.rod_length),
+        platform_joints(t.platform_joints),
+        joint_offset(t.joint_offset),
+        min_joint(t.min_joint),
+        max_joint(t.max_joint),
+        home_branch(t.home_branch),
+        characteristic_length(t.characteristic_length) {}
+};
+
 namespace compensation_detail {
 
+// The table's geometries are read in place (the table outlives the
+// compensator, as the hybrid's source errors do); validate_table checked
+// them (machine_values_ok: unit, perpendicular axes, positive lengths,
+// limits narrower than a turn).
 template <class S> struct Model<Rus6Machine<S>> {
-  Rus6Geometry<S> nominal;
-  Rus6Geometry<S> calibrated;
+  const Rus6Machine<S>* machine = nullptr;
   bool load(const Rus6Machine<S>& m) {
-    nominal = to_core(m.nominal);
-    calibrated = to_core(m.calibrated);
-    return rus6_valid_geometry(nominal) && rus6_valid_geometry(calibrated);
+    machine = &m;
+    return true;
   }
-  Pose<S> home_pose() const { return nominal.home; }
+  Pose<S> home_pose() const {
+    Pose<S> home;
+    home.R = Eigen::Map<const Mat3<S>>(machine->nominal.home_rotation);
+    home.p = Eigen::Map<const Vec3<S>>(machine->nominal.home_position);
+    return home;
+  }
 
   // The nominal IK with its Jacobian (∂q/∂twist, rus6.hpp): q_nom, the
   // singularity test (serial and parallel) and the static loads.
@@ -201,7 +235,7 @@ template <class S> struct Model<Rus6Machine<S>> {
   Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
                                S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load) const {
     Mat6<S> J;
-    const Status s = rus6_ik(nominal, pose, nominal_q, &J);
+    const Status s = rus6_ik(Rus6GeometryRef<S>(machine->nominal), pose, nominal_q, &J);
     if (s != Status::Ok) return s;
     return ik_jacobian_loads<kPayload>(J, pose, need_load, g, load, payload_weight, payload_com, payload_load);
   }
@@ -213,7 +247,9 @@ template <class S> struct Model<Rus6Machine<S>> {
   template <class Warm> Status solve_exact(const Pose<S>& target, Vec6<S>& ideal, Warm*) const {
     return solve_closed_form(target, ideal);
   }
-  Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return rus6_ik(calibrated, target, ideal); }
+  Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const {
+    return rus6_ik(Rus6GeometryRef<S>(machine->calibrated), target, ideal);
+  }
 };
 
 }  // namespace compensation_detail
