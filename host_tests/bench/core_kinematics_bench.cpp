@@ -58,6 +58,47 @@ template <class S> void BM_StewartIKJacobian(benchmark::State& state) {
 // ---------------------------------------------------------------- 6-UPS FK
 // The GUIDE case: from home (0, 0, 200, 0, 0, 0) to the joint lengths of
 // (10, 5, 205, 2°, 1.5°, −3°).
+// The 6-RUS (issue #33's bar: FK ≤ 1 µs): rus6-ref at a pose 30 mm and
+// 0.1 rad from home, FK from home as a controller without a previous pose
+// would start (from the previous pose it takes fewer iterations).
+template <class S> Pose<S> rus6_target() {
+  return Pose<double>::from_xyz_rpy(20, -15, 300, 0.08, -0.05, 0.1).cast<S>();
+}
+template <class S> void BM_Rus6IK(benchmark::State& state) {
+  const Rus6Geometry<S> g = make_rus6_ref<S>();
+  Pose<S> pose = rus6_target<S>();
+  Vec6<S> q;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(pose);
+    benchmark::DoNotOptimize(rus6_ik(g, pose, q));
+    benchmark::DoNotOptimize(q);
+  }
+  state.counters["ok"] = rus6_ik(g, rus6_target<S>(), q) == Status::Ok;
+}
+// Arg 0: from home; Arg 1: from the previous point of a path 1 mm and
+// 1 mrad away (what a controller has).
+template <class S> void BM_Rus6FK(benchmark::State& state) {
+  const Rus6Geometry<S> g = make_rus6_ref<S>();
+  Vec6<S> q = Vec6<S>::Zero();
+  rus6_ik(g, rus6_target<S>(), q);
+  Pose<S> guess = state.range(0) == 0 ? g.home : Pose<double>::from_xyz_rpy(20.6, -15.6, 300.5, 0.081, -0.051, 0.101).cast<S>();
+  Pose<S> out;
+  FkReport<S> report;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(q);
+    benchmark::DoNotOptimize(guess);
+    report = rus6_fk(g, q, guess, out);
+    benchmark::DoNotOptimize(report);
+    benchmark::DoNotOptimize(out);
+  }
+  Pose<S> check;
+  const FkReport<S> r = rus6_fk(g, q, guess, check);
+  const FkAccuracy acc = fk_accuracy(check, rus6_target<double>());
+  state.counters["ok"] = r.status == Status::Ok;
+  state.counters["iterations"] = r.iterations;
+  state.counters["pos_err_mm"] = acc.position_mm;
+}
+
 template <class S> void BM_StewartFK(benchmark::State& state) {
   StewartGeometry<S> g = make_stewart_seed001<S>();
   Vec6<S> q = Vec6<S>::Zero();
@@ -198,6 +239,10 @@ BENCHMARK_TEMPLATE(BM_StewartIK, double);
 BENCHMARK_TEMPLATE(BM_StewartIK, float);
 BENCHMARK_TEMPLATE(BM_StewartIKJacobian, double);
 BENCHMARK_TEMPLATE(BM_StewartIKJacobian, float);
+BENCHMARK_TEMPLATE(BM_Rus6IK, double);
+BENCHMARK_TEMPLATE(BM_Rus6IK, float);
+BENCHMARK_TEMPLATE(BM_Rus6FK, double)->Arg(0)->Arg(1);
+BENCHMARK_TEMPLATE(BM_Rus6FK, float)->Arg(0)->Arg(1);
 BENCHMARK_TEMPLATE(BM_StewartFK, double);
 BENCHMARK_TEMPLATE(BM_StewartFK, float);
 BENCHMARK_TEMPLATE(BM_HybridIK, double);
