@@ -45,34 +45,11 @@ using V6 = kincal::Vec6<double>;
 const std::string kDir = "identify_independent_rus6";
 const std::string kRobot = "rus6-ref";
 
-struct Diag {
-  std::string verdict;
-  std::vector<std::string> accepted;
-  double noise_um = 0, noise_urad = 0;
-  bool ok = false;
-};
+using Diag = ind::Verdict;
+using ind::joined;
 
 Diag diagnose(const std::string& data, const std::string& tag, bool give_noise) {
-  Diag d;
-  const std::string json = kDir + "/" + tag + (give_noise ? "_diag_given.json" : "_diag_est.json");
-  const kincal_test::ToolRun r = kincal_test::run_tool_in(
-      kDir, "diagnose --robot " + kRobot + " --data " + data + " --json " + json +
-                (give_noise ? " --noise-um 2 --noise-urad 5" : ""));
-  EXPECT_EQ(r.code, 0) << tag << ": " << r.err;
-  if (r.code != 0) return d;
-  const nlohmann::json j = nlohmann::json::parse(kincal::identify::read_text_file(json));
-  d.verdict = j.at("verdict").get<std::string>();
-  for (const auto& a : j.at("accepted")) d.accepted.push_back(a.get<std::string>());
-  d.noise_um = j.at("noise_um").get<double>();
-  d.noise_urad = j.value("noise_urad", 0.0);
-  d.ok = true;
-  return d;
-}
-
-std::string joined(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
-  return s;
+  return ind::diagnose_in(kDir, kRobot, data, tag, give_noise);
 }
 
 // identify (with `effects`, "" = base only), compensate the held-out rows,

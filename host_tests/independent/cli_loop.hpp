@@ -88,6 +88,38 @@ inline IdentifyCompensate identify_and_compensate(const std::string& dir, const 
   return r;
 }
 
+// `kincal diagnose` of `data` in `dir` with the noise given (2 µm / 5 µrad)
+// or estimated: the verdict, the accepted effects and the noise it used.
+struct Verdict {
+  std::string verdict;
+  std::vector<std::string> accepted;
+  double noise_um = 0, noise_urad = 0;
+  bool ok = false;
+};
+inline Verdict diagnose_in(const std::string& dir, const std::string& robot, const std::string& data,
+                           const std::string& tag, bool give_noise) {
+  Verdict d;
+  const std::string json = dir + "/" + tag + (give_noise ? "_diag_given.json" : "_diag_est.json");
+  const kincal_test::ToolRun r = kincal_test::run_tool_in(
+      dir, "diagnose --robot " + robot + " --data " + data + " --json " + json +
+               (give_noise ? " --noise-um 2 --noise-urad 5" : ""));
+  EXPECT_EQ(r.code, 0) << tag << ": " << r.err;
+  if (r.code != 0) return d;
+  const nlohmann::json j = nlohmann::json::parse(identify::read_text_file(json));
+  d.verdict = j.at("verdict").get<std::string>();
+  for (const auto& a : j.at("accepted")) d.accepted.push_back(a.get<std::string>());
+  d.noise_um = j.at("noise_um").get<double>();
+  d.noise_urad = j.value("noise_urad", 0.0);
+  d.ok = true;
+  return d;
+}
+
+inline std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
 struct HeldOut {
   double position_um = 0;  // worst |reached − asked|, µm
   double rotation_urad = 0;

@@ -25,6 +25,7 @@
 #include "kincal/core/effects.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/status.hpp"
+#include "kincal/core/stewart.hpp"  // FkReport
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
@@ -82,6 +83,38 @@ class ActualMachine {
   // be empty).
   virtual ReachedPose reach(const PoseRow& row,
                             const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const = 0;
+};
+
+// The actual machine of a family whose nominal IK gives the commands and
+// whose FK of the erroneous geometry gives the pose (seed 001 §5.2; the
+// 6-UPS and the 6-RUS): the row's commands (q, else the nominal IK of the
+// commanded pose) with `joint_error` added drive FK(actual) from the
+// commanded pose.
+template <class Geometry, Status (*Ik)(const Geometry&, const Pose<double>&, Vec6<double>&),
+          FkReport<double> (*Fk)(const Geometry&, const Vec6<double>&, const Pose<double>&, Pose<double>&)>
+class CommandsThenFk final : public ActualMachine {
+ public:
+  CommandsThenFk(const Geometry& nominal, const Geometry& actual) : nominal_(nominal), actual_(actual) {}
+  ReachedPose reach(const PoseRow& row,
+                    const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const override {
+    ReachedPose out;
+    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
+    Vec6<double> q;
+    if (row.q) {
+      q = *row.q;
+    } else {
+      out.status = Ik(nominal_, commanded, q);
+      out.stage = "inverse kinematics of the commanded pose";
+      if (out.status != Status::Ok) return out;
+    }
+    if (joint_error) q += joint_error(q);
+    out.status = Fk(actual_, q, commanded, out.pose).status;
+    out.stage = "forward kinematics of the erroneous machine";
+    return out;
+  }
+
+ private:
+  Geometry nominal_, actual_;
 };
 
 class Family {

@@ -215,38 +215,16 @@ std::string Rus6Family::machine_value_violation(const AnyCalibrationTable& table
 // ---------------------------------------------------------------- simulation
 
 namespace {
-
-// The error-free commands (given, or the nominal IK of the commanded pose)
-// drive the erroneous machine's exact FK.
-class Rus6Actual final : public ActualMachine {
- public:
-  Rus6Actual(const Robot& nominal, const Robot& actual) : nominal_(nominal.rus6()), actual_(actual.rus6()) {}
-  ReachedPose reach(const PoseRow& row,
-                    const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const override {
-    ReachedPose out;
-    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-    Vec6<double> q;
-    if (row.q) {
-      q = *row.q;
-    } else {
-      out.status = rus6_ik(nominal_, commanded, q);
-      out.stage = "inverse kinematics of the commanded pose";
-      if (out.status != Status::Ok) return out;
-    }
-    if (joint_error) q += joint_error(q);
-    out.status = rus6_fk(actual_, q, commanded, out.pose).status;
-    out.stage = "forward kinematics of the erroneous machine";
-    return out;
-  }
-
- private:
-  Rus6Geometry<double> nominal_, actual_;
-};
-
+Status rus6_commands(const Rus6Geometry<double>& g, const Pose<double>& pose, Vec6<double>& q) { return rus6_ik(g, pose, q); }
+FkReport<double> rus6_reached(const Rus6Geometry<double>& g, const Vec6<double>& q, const Pose<double>& guess,
+                              Pose<double>& pose) {
+  return rus6_fk(g, q, guess, pose);
+}
 }  // namespace
 
 std::unique_ptr<ActualMachine> Rus6Family::actual_machine(const Robot& nominal, const Robot& actual) const {
-  return std::make_unique<Rus6Actual>(nominal, actual);
+  return std::make_unique<CommandsThenFk<Rus6Geometry<double>, rus6_commands, rus6_reached>>(nominal.rus6(),
+                                                                                              actual.rus6());
 }
 
 }  // namespace kincal::identify

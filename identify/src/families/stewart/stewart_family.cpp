@@ -132,30 +132,13 @@ std::vector<ParameterSpec> stewart_table_with_leg_offsets() {
 }
 
 // seed 001 §5.2: the error-free commands drive the error-containing FK.
-class StewartActual final : public ActualMachine {
- public:
-  StewartActual(const Robot& nominal, const Robot& actual) : nominal_(nominal.stewart()), actual_(actual.stewart()) {}
-  ReachedPose reach(const PoseRow& row,
-                    const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const override {
-    ReachedPose out;
-    const Pose<double> commanded = Pose<double>::from_xyz_rpy(row.commanded);
-    Vec6<double> q;
-    if (row.q) {
-      q = *row.q;
-    } else {
-      out.status = stewart_ik(nominal_, commanded, q);
-      out.stage = "inverse kinematics of the commanded pose";
-      if (out.status != Status::Ok) return out;
-    }
-    if (joint_error) q += joint_error(q);
-    out.status = stewart_fk(actual_, q, commanded, out.pose).status;
-    out.stage = "forward kinematics of the erroneous machine";
-    return out;
-  }
-
- private:
-  StewartGeometry<double> nominal_, actual_;
-};
+Status stewart_commands(const StewartGeometry<double>& g, const Pose<double>& pose, Vec6<double>& q) {
+  return stewart_ik(g, pose, q);
+}
+FkReport<double> stewart_reached(const StewartGeometry<double>& g, const Vec6<double>& q, const Pose<double>& guess,
+                                 Pose<double>& pose) {
+  return stewart_fk(g, q, guess, pose);
+}
 
 }  // namespace
 
@@ -213,7 +196,8 @@ std::string StewartFamily::machine_limit_violation(const AnyCalibrationTable& ta
 }
 
 std::unique_ptr<ActualMachine> StewartFamily::actual_machine(const Robot& nominal, const Robot& actual) const {
-  return std::make_unique<StewartActual>(nominal, actual);
+  return std::make_unique<CommandsThenFk<StewartGeometry<double>, stewart_commands, stewart_reached>>(
+      nominal.stewart(), actual.stewart());
 }
 
 }  // namespace kincal::identify
