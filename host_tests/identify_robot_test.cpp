@@ -100,6 +100,22 @@ TEST(identifyRobot, CommittedExampleFilesMatchBuiltins) {
   // The files are exactly what `kincal robot --out` writes today.
   EXPECT_EQ(ki::read_text_file(dir + "stewart-seed001.json"), stewart_json());
   EXPECT_EQ(ki::read_text_file(dir + "hybrid-seed000.json"), hybrid_json());
+  // The 6-RUS: the file reads back to the built-in exactly (every number of
+  // the geometry), and is what `kincal robot --out` writes.
+  const ki::Robot r = ki::load_robot(dir + "rus6-ref.json");
+  const kincal::Rus6Geometry<double> ref = kincal::make_rus6_ref<double>();
+  EXPECT_EQ(r.rus6().shaft_points, ref.shaft_points);
+  EXPECT_EQ(r.rus6().shaft_axes, ref.shaft_axes);
+  EXPECT_EQ(r.rus6().crank_zero, ref.crank_zero);
+  EXPECT_EQ(r.rus6().platform_joints, ref.platform_joints);
+  EXPECT_EQ(r.rus6().crank_length, ref.crank_length);
+  EXPECT_EQ(r.rus6().rod_length, ref.rod_length);
+  EXPECT_EQ(r.rus6().min_joint, ref.min_joint);
+  EXPECT_EQ(r.rus6().max_joint, ref.max_joint);
+  EXPECT_EQ(r.rus6().home_branch, ref.home_branch);
+  EXPECT_LT((r.rus6().home.p - ref.home.p).norm(), 1e-12);
+  EXPECT_EQ(r.screw_lead, ki::builtin_robot("rus6-ref").screw_lead);
+  EXPECT_EQ(ki::read_text_file(dir + "rus6-ref.json"), ki::robot_to_json(ki::builtin_robot("rus6-ref")));
 }
 
 TEST(identifyRobot, CustomHybridDerivationMatchesCoreFactory) {
