@@ -248,6 +248,15 @@ inline UpsLeg make_ups_leg(const V3& A, const V3& u, const UpsLegErrors& e) {
   return leg;
 }
 
+// Six zero vectors: Eigen's default constructor leaves a vector
+// uninitialised, so a member `std::array<V3, 6> x{}` is NOT zeros (the
+// sanitizer build's clang showed it); initialise such members with this.
+inline std::array<V3, 6> zero_vectors() {
+  std::array<V3, 6> a;
+  a.fill(V3::Zero());
+  return a;
+}
+
 // ------------------------------------------------------------------ random errors
 
 inline double uniform(std::mt19937_64& rng, double scale) {

@@ -48,10 +48,10 @@
 namespace kincal::independent {
 
 struct Rus6PhysicalErrors {
-  std::array<V3, 6> frame_shift{};  // motor frame origin, base frame, mm
-  std::array<V3, 6> frame_turn{};   // motor frame rotation vector, base frame, rad
-  std::array<double, 6> crank{}, rod{}, pin{};  // mm
-  std::array<V3, 6> sphere{};       // rod's platform sphere, platform frame, mm
+  std::array<V3, 6> frame_shift = zero_vectors();  // motor frame origin, base frame, mm
+  std::array<V3, 6> frame_turn = zero_vectors();   // motor frame rotation vector, base frame, rad
+  std::array<double, 6> crank{}, rod{}, pin{};     // mm
+  std::array<V3, 6> sphere = zero_vectors();       // rod's platform sphere, platform frame, mm
 };
 
 struct Rus6Effects {
@@ -130,23 +130,29 @@ class Rus6PhysicalSimulator {
     for (int i = 0; i < 6; ++i) {
       const V3 P = pose.R * nominal.sphere_[i] + pose.p;
       auto f = [&](double theta) { return (P - nominal.tip(i, theta)).norm() - nominal.rod_[i]; };
-      const double lo = -80.0 * kPi / 180.0, hi = 70.0 * kPi / 180.0, step = 0.01;
-      double a = lo, fa = f(a);
+      const double lo = -80.0 * kPi / 180.0, hi = 70.0 * kPi / 180.0;
+      const int steps = 300;
       bool found = false;
-      for (double b = lo + step; b <= hi + 1e-12; b += step) {
-        const double fb = f(b);
-        if ((fa <= 0) != (fb <= 0)) {
-          for (int it = 0; it < 80; ++it) {
-            const double m = 0.5 * (a + b), fm = f(m);
-            if ((fa <= 0) != (fm <= 0)) b = m;
-            else a = m, fa = fm;
-          }
-          q(i) = 0.5 * (a + b);
-          found = true;
-          break;
+      double left = lo, f_left = f(lo);
+      for (int k = 1; k <= steps && !found; ++k) {
+        const double right = lo + (hi - lo) * k / steps, f_right = f(right);
+        if ((f_left <= 0) == (f_right <= 0)) {
+          left = right;
+          f_left = f_right;
+          continue;
         }
-        a = b;
-        fa = fb;
+        double low = left, high = right, f_low = f_left;
+        for (int it = 0; it < 80; ++it) {
+          const double mid = 0.5 * (low + high), f_mid = f(mid);
+          if ((f_low <= 0) == (f_mid <= 0)) {
+            low = mid;
+            f_low = f_mid;
+          } else {
+            high = mid;
+          }
+        }
+        q(i) = 0.5 * (low + high);
+        found = true;
       }
       if (!found) return false;
     }

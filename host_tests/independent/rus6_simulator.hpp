@@ -92,12 +92,12 @@ namespace kincal::independent {
 // A nominal 6-RUS: the quantities of a kincal rus6 robot description.
 struct Rus6Nominal {
   std::string name;
-  std::array<V3, 6> shaft_point{};     // mm, base frame: a point on motor i's shaft line (the crank circle's centre)
-  std::array<V3, 6> shaft_axis{};      // unit; θ turns right-handed about it
-  std::array<V3, 6> crank_zero{};      // unit ⟂ axis: the crank at θ = 0
+  std::array<V3, 6> shaft_point = zero_vectors();     // mm, base frame: a point on motor i's shaft line (the crank circle's centre)
+  std::array<V3, 6> shaft_axis = zero_vectors();      // unit; θ turns right-handed about it
+  std::array<V3, 6> crank_zero = zero_vectors();      // unit ⟂ axis: the crank at θ = 0
   std::array<double, 6> crank_length{};  // mm
   std::array<double, 6> rod_length{};    // mm, sphere to sphere
-  std::array<V3, 6> platform_joint{};  // mm, platform frame: rod-end sphere centres
+  std::array<V3, 6> platform_joint = zero_vectors();  // mm, platform frame: rod-end sphere centres
   V6 home = V6::Zero();                // x..rz of the home pose
   V6 min_command = V6::Zero(), max_command = V6::Zero();    // rad: joint limits on q
   V6 workspace_min = V6::Zero(), workspace_max = V6::Zero();  // box of commanded poses (absolute x..rz)
@@ -166,13 +166,13 @@ inline Rus6Nominal rus6_tangential_nominal() {
 
 // All fields zero = the nominal machine.
 struct Rus6Errors {
-  std::array<V3, 6> motor_rotation{};     // rad: rotation vector of motor frame i, motor-frame coordinates
+  std::array<V3, 6> motor_rotation = zero_vectors();     // rad: rotation vector of motor frame i, motor-frame coordinates
                                           //      (x crank zero, y axis × zero, z shaft axis; z = an encoder-like turn)
-  std::array<V3, 6> motor_translation{};  // mm: motor frame i moved, motor-frame coordinates
-  std::array<V3, 6> crank_pin{};          // mm: crank pin (rod's lower sphere) moved, crank-frame coordinates
+  std::array<V3, 6> motor_translation = zero_vectors();  // mm: motor frame i moved, motor-frame coordinates
+  std::array<V3, 6> crank_pin = zero_vectors();          // mm: crank pin (rod's lower sphere) moved, crank-frame coordinates
                                           //     (x along the crank: length, y ahead of it, z along the shaft)
   std::array<double, 6> rod{};            // mm: rod length error
-  std::array<V3, 6> platform_sphere{};    // mm: rod's upper sphere moved, platform frame
+  std::array<V3, 6> platform_sphere = zero_vectors();    // mm: rod's upper sphere moved, platform frame
   std::array<double, 6> encoder{};        // rad: θ = q + this
   V3 tool_point = V3::Zero();             // mm: measured frame's origin, platform frame
   V3 tool_rotation = V3::Zero();          // rad: measured frame's orientation on the platform (rotation vector)
