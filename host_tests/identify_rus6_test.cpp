@@ -230,6 +230,30 @@ INSTANTIATE_TEST_SUITE_P(Rus6, Rus6RoundTrip,
                                            RoundTrip{"one target in the tracker's frame", 0.1, 1e-3, 1}),
                          [](const ::testing::TestParamInfo<RoundTrip>& p) { return "case" + std::to_string(p.index); });
 
+// A blunder: one cal row's measured position 0.4 mm off (a tracker that
+// lost its target for a moment). The deleted-node screen names that row,
+// and the fit without it is the fit of the clean data.
+TEST(Rus6Identify, ABlunderIsNamedAndLeftOut) {
+  const ki::Robot nominal = ki::builtin_robot("rus6-ref");
+  const ki::Robot actual = ki::apply_parameters(nominal, as_parameters(nominal, random_errors(0.05, 5e-4, 31)));
+  ki::SimulateOptions o;
+  o.noise_mm = 0.002;
+  o.noise_rad = 5e-6;
+  o.seed = 8;
+  ki::SimulateReport report;
+  const ki::PoseTable clean = ki::simulate(nominal, actual, pose_table(random_poses(nominal, 80, 30, 0.1, 9), 1000), o, report);
+  ki::PoseTable data = clean;
+  (*data.rows[17].measured)(1) += 0.4;
+  const ki::TargetCalibration all = ki::calibrate_targets(nominal, data);
+  const ki::TargetOutlierSearch search = ki::target_outlier_search(nominal, data, all);
+  ASSERT_EQ(search.removed.size(), 1u);
+  EXPECT_EQ(search.removed.front().id, data.rows[17].id);
+  ki::PoseTable without = clean;
+  without.rows.erase(without.rows.begin() + 17);
+  const ki::TargetCalibration reference = ki::calibrate_targets(nominal, without);
+  EXPECT_LT((search.rest.errors - reference.errors).norm(), 1e-6 * std::max(1.0, reference.errors.norm()));
+}
+
 // The description's refusals name the key, with the file's line.
 TEST(Rus6Description, RefusesWhatTheKinematicsCannotUse) {
   const std::string good = ki::robot_to_json(ki::builtin_robot("rus6-ref"));
