@@ -6,7 +6,7 @@
 // carrying, in turn, nothing else, gearbox backlash, gravity compliance
 // (torques by virtual work through its own FK), thermal expansion of the
 // rods only, and one effect outside the library (a worn gear segment: a
-// quadratic error above a knee of motor 2's command). Measured: full poses
+// quadratic error above a knee of motor 2's command, at two sizes). Measured: full poses
 // with 2 µm / 5 µrad noise at 120 random poses in rus6-ref's box, in motion
 // order, every third held out, a temperature per row (15–35 °C), the
 // approach directions from the motion order.
@@ -180,12 +180,19 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
     e.rod_alpha = 2.3e-5;  // aluminium rods, steel elsewhere ignored
     cases.push_back({"rod thermal expansion", e, "outside:thermal"});
   }
-  {
+  // The worn segment at two sizes: 2 mrad at the top of motor 2's range
+  // (base RMS 8.9 µm, 4.4× the noise) is asserted both ways; at 1 mrad (base
+  // RMS 3.6 µm) the noise estimate takes it in (2.74 µm for 2) and passes the
+  // residual after `cyclic` for noise — the estimate's limit on 120 random
+  // poses in six joints, printed, asserted with the noise given only
+  // (docs/diagnosis.md).
+  for (const double top_error : {2e-3, 1e-3}) {
     ind::Rus6Effects e;
     e.ramp_joint = 1;
     e.ramp_knee = knee;
-    e.ramp_gain = 1e-3 / std::pow(std::max(0.05, top - knee), 2);  // 1 mrad at the top of motor 2's range
-    cases.push_back({"outside (motor 2 worn gear segment)", e, "outside"});
+    e.ramp_gain = top_error / std::pow(std::max(0.05, top - knee), 2);
+    cases.push_back({"outside (motor 2 worn gear, " + std::to_string(int(top_error * 1e3)) + " mrad)", e,
+                     top_error > 1.5e-3 ? "outside" : "outside:small"});
   }
 
   double floor_um = -1;
@@ -213,19 +220,22 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
       EXPECT_EQ(given.verdict, "consistent") << k.name;
       EXPECT_EQ(est.verdict, "consistent") << k.name;
     } else if (k.truth == "outside") {
-      // With the noise given: unexplained (cyclic takes part of it). With
-      // the noise estimated (2.5 um, 25 % high) the residual after cyclic
-      // passes for noise and the verdict reads "explained": not asserted,
-      // an open gap of issue #33 (notes).
+      // Unexplained both ways (cyclic takes part of it).
+      EXPECT_EQ(given.verdict, "unexplained") << k.name;
+      EXPECT_EQ(est.verdict, "unexplained") << k.name;
+    } else if (k.truth == "outside:small") {
       EXPECT_EQ(given.verdict, "unexplained") << k.name;
     } else if (k.truth == "outside:thermal") {
-      // Rods alone expanding is not the library's uniform `thermal`: with
-      // the noise given the verdict says the library cannot carry it (it
-      // accepts `thermal` for what it can). With the noise estimated, the
-      // estimate takes the unexplained residual for noise (24 um here) and
-      // the verdict reads "explained": a known weakness of the estimate
-      // (notes of issue #33), printed above, not asserted.
+      // Rods alone expanding is not the library's uniform `thermal`: the
+      // verdict says the library cannot carry it (it accepts `thermal` for
+      // what it can). With the noise estimated: the estimate's
+      // interpolation is exact for a misfit linear in the temperature
+      // (4.2 µm for 2; 24 µm before it took the temperature in), and the
+      // final residual still follows the temperature between joint-space
+      // neighbours (structure).
       EXPECT_EQ(given.verdict, "unexplained") << k.name;
+      EXPECT_EQ(est.verdict, "unexplained") << k.name;
+      EXPECT_EQ(joined(given.accepted), "thermal") << k.name;
     } else if (k.truth == "absorbed:compliance") {
       // A fixed payload's deflection is a smooth function of the pose that
       // the 66 geometric parameters absorb on this workspace (the diagnosis

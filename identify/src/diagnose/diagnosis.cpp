@@ -252,8 +252,18 @@ NoiseData joint_space_noise_data(const Robot& robot, const BaseModel& base, bool
     if (v.empty()) continue;
     out.place.push_back(u);
     out.residual.push_back(Eigen::Map<const VectorXd>(v.data(), Index(v.size())));
+    if (n.effect.temperature) out.covariate.push_back(VectorXd::Constant(1, *n.effect.temperature));
   }
   out.leverage = rows > 0 ? double(base.parameters) / double(rows) : 0.0;
+  // The row's temperature, where every node has one and it varies: a
+  // residual that follows it between joint-space neighbours is not noise.
+  const bool temperatures = out.covariate.size() == out.place.size() && !out.covariate.empty() &&
+                            std::any_of(out.covariate.begin(), out.covariate.end(),
+                                        [&](const VectorXd& t) { return t(0) != out.covariate.front()(0); });
+  if (temperatures)
+    out.covariate_names = {"temperature"};
+  else
+    out.covariate.clear();
   return out;
 }
 
@@ -898,11 +908,21 @@ void DiagnosisRun::judge() {
   const StructureTest st = joint_space_structure(final_data);
   d.structure_ratio = st.ratio;
   d.structure_p = st.p;
+  d.structure_covariate = st.covariate.name;
+  d.structure_covariate_rho = st.covariate.rho;
+  d.structure_covariate_p = st.covariate.p;
   bool structure = st.p < options.alpha;
   std::string structure_why;
   if (structure)
     structure_why = "the final residual is more alike at neighbouring nodes in joint space than at random nodes "
                     "(ratio " + fmt(st.ratio) + ", p = " + fmt(st.p) + ")";
+  if (st.covariate.p < options.alpha) {
+    if (!structure_why.empty()) structure_why += "; ";
+    structure_why += "the final residual differs between neighbouring nodes in joint space with the " +
+                     st.covariate.name + " (rank correlation " + fmt(st.covariate.rho) + ", p = " +
+                     fmt(st.covariate.p) + ")";
+    structure = true;
+  }
   const bool trusted = noise_known && d.noise_trusted;
   if (trusted && std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
     for (int j = 0; j < 6; ++j) {
@@ -1334,6 +1354,10 @@ std::string diagnosis_to_json(const Diagnosis& d) {
   if (d.position_estimates.joint_space > 0) j["noise_estimates_um"] = estimates_json(d.position_estimates);
   if (d.orientation_estimates.joint_space > 0) j["noise_estimates_urad"] = estimates_json(d.orientation_estimates);
   j["structure"] = {{"ratio", d.structure_ratio}, {"p_value", d.structure_p}};
+  if (!d.structure_covariate.empty())
+    j["structure"]["covariate"] = {{"name", d.structure_covariate},
+                                   {"rank_correlation", d.structure_covariate_rho},
+                                   {"p_value", d.structure_covariate_p}};
   nlohmann::ordered_json collinear = nlohmann::ordered_json::array();
   for (const CollinearPair& c : d.collinear)
     collinear.push_back({{"effects", {c.first, c.second}}, {"share", c.share}});

@@ -34,7 +34,17 @@ struct Neighbourhoods {
 
 constexpr double kPenaltyPower = 2.0;
 constexpr double kMaxLeak = 0.44;  // (1.2)² − 1
-Neighbourhoods neighbourhoods(const std::vector<VectorXd>& place, std::size_t k) {
+Neighbourhoods neighbourhoods(const std::vector<VectorXd>& place, std::size_t k,
+                              const std::vector<VectorXd>* covariate = nullptr) {
+  // Covariates over their range over the nodes (joint-space units: the
+  // places are over the strokes), constrained like the places but not used
+  // to choose the neighbours.
+  VectorXd cov_scale;
+  if (covariate != nullptr && !covariate->empty()) {
+    VectorXd lo = covariate->front(), hi = covariate->front();
+    for (const VectorXd& c : *covariate) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+    cov_scale = (hi - lo).cwiseMax(1e-300).cwiseInverse();
+  }
   const std::size_t n = place.size();
   Neighbourhoods out;
   out.index.resize(n), out.weight.resize(n), out.inflation.resize(n), out.distance.resize(n), out.nearest.resize(n);
@@ -43,11 +53,14 @@ Neighbourhoods neighbourhoods(const std::vector<VectorXd>& place, std::size_t k)
     for (std::size_t j = 0; j < n; ++j) d[j] = {j == i ? HUGE_VAL : (place[j] - place[i]).squaredNorm(), j};
     const std::size_t kk = std::min(k, n - 1);
     std::partial_sort(d.begin(), d.begin() + std::ptrdiff_t(kk), d.end());
-    MatrixXd D(place[i].size(), Index(kk));
+    MatrixXd D(place[i].size() + cov_scale.size(), Index(kk));
     double mean_d = 0;
     for (std::size_t m = 0; m < kk; ++m) {
       out.index[i].push_back(d[m].second);
-      D.col(Index(m)) = place[d[m].second] - place[i];
+      D.col(Index(m)).head(place[i].size()) = place[d[m].second] - place[i];
+      if (cov_scale.size() > 0)
+        D.col(Index(m)).tail(cov_scale.size()) =
+            ((*covariate)[d[m].second] - (*covariate)[i]).cwiseProduct(cov_scale);
       mean_d += std::sqrt(d[m].first);
     }
     out.nearest[i] = d[0].second;
@@ -124,6 +137,65 @@ double quadratic_leak(const Neighbourhoods& nb, const std::vector<VectorXd>& pla
   return worst;
 }
 
+// Ranks of v, ties at their mean rank.
+std::vector<double> ranks(const std::vector<double>& v) {
+  std::vector<std::size_t> order(v.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  std::vector<double> rank(v.size());
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j + 1 < order.size() && v[order[j + 1]] == v[order[i]]) ++j;
+    for (std::size_t m = i; m <= j; ++m) rank[order[m]] = 0.5 * double(i + j);
+    i = j + 1;
+  }
+  return rank;
+}
+
+double spearman_rho(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::vector<double> ra = ranks(a), rb = ranks(b);
+  const Eigen::Map<const VectorXd> x(ra.data(), Index(ra.size())), y(rb.data(), Index(rb.size()));
+  const VectorXd cx = x.array() - x.mean(), cy = y.array() - y.mean();
+  const double den = cx.norm() * cy.norm();
+  return den > 0 ? cx.dot(cy) / den : 0.0;
+}
+
+// The pseudo-residuals `s` (standardised, per node) against each covariate's
+// own standardised pseudo-residual over the same neighbourhoods: under noise
+// alone independent, so a positive rank correlation says the residual moves
+// with the covariate between neighbours (the strongest, Bonferroni p).
+CovariateDependence covariate_dependence(const Neighbourhoods& nb, const NoiseData& data,
+                                         const std::vector<double>& s) {
+  CovariateDependence best;
+  const std::size_t n = s.size();
+  if (data.covariate.size() != n || n < 3) return best;
+  const Index count = data.covariate.front().size();
+  for (Index c = 0; c < count; ++c) {
+    std::vector<double> away(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      double e = data.covariate[i](c);
+      for (std::size_t m = 0; m < nb.index[i].size(); ++m) e -= nb.weight[i](Index(m)) * data.covariate[nb.index[i][m]](c);
+      away[i] = e * e / nb.inflation[i];
+    }
+    const double rho = spearman_rho(s, away);
+    const double p = std::min(1.0, double(count) * 0.5 * std::erfc(rho * std::sqrt(double(n - 1)) / std::sqrt(2.0)));
+    if (c == 0 || p < best.p) {
+      best.name = std::size_t(c) < data.covariate_names.size() ? data.covariate_names[std::size_t(c)]
+                                                                 : "covariate " + std::to_string(c + 1);
+      best.rho = rho;
+      best.p = p;
+    }
+  }
+  return best;
+}
+
+std::vector<double> standardised_pseudos(const Neighbourhoods& nb, const std::vector<VectorXd>& r,
+                                         const std::vector<std::size_t>* perm = nullptr) {
+  std::vector<double> s(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) s[i] = standardised_pseudo(nb, r, i, perm);
+  return s;
+}
+
 }  // namespace
 
 NoiseEstimate estimate_noise_in_joint_space(const NoiseData& data, const NoiseEstimateOptions& options) {
@@ -136,12 +208,11 @@ NoiseEstimate estimate_noise_in_joint_space(const NoiseData& data, const NoiseEs
   const double k = double(data.residual.front().size());
   const double scale = 1.0 / (chi2_median(k) * std::max(1e-6, 1.0 - data.leverage));
   auto sigma_over = [&](const Neighbourhoods& nb, double& spacing) {
-    std::vector<double> s(n);
-    for (std::size_t i = 0; i < n; ++i) s[i] = standardised_pseudo(nb, data.residual, i);
     spacing = median_of(nb.distance);
-    return std::sqrt(median_of(s) * scale);
+    return std::sqrt(median_of(standardised_pseudos(nb, data.residual)) * scale);
   };
-  const Neighbourhoods narrow = neighbourhoods(data.place, options.neighbours);
+  const std::vector<VectorXd>* cov = data.covariate.size() == n ? &data.covariate : nullptr;
+  const Neighbourhoods narrow = neighbourhoods(data.place, options.neighbours, cov);
   out.neighbours = options.neighbours;
   out.sigma = sigma_over(narrow, out.spacing);
   {
@@ -153,7 +224,7 @@ NoiseEstimate estimate_noise_in_joint_space(const NoiseData& data, const NoiseEs
   }
   double spacing_wide = 0;
   out.neighbours_wide = 2 * options.neighbours;
-  out.sigma_wide = sigma_over(neighbourhoods(data.place, out.neighbours_wide), spacing_wide);
+  out.sigma_wide = sigma_over(neighbourhoods(data.place, out.neighbours_wide, cov), spacing_wide);
   if (!(out.sigma > 0)) {
     out.why_not = "the residual is zero at neighbouring nodes";
     return out;
@@ -173,10 +244,12 @@ NoiseEstimate estimate_noise_in_joint_space(const NoiseData& data, const NoiseEs
   // can carry (σ² up by 44 %, σ by 20 %) in the pseudo-residuals.
   // The residual beyond a linear function of the places (which the
   // pseudo-residuals cancel exactly), per coordinate.
-  const Index dim = data.place.front().size();
-  MatrixXd L = MatrixXd::Zero(Index(n), dim + 1), R = MatrixXd::Zero(Index(n), Index(k));
+  // (and of the covariates, which they cancel too).
+  const Index dim = data.place.front().size(), covariates = cov != nullptr ? cov->front().size() : 0;
+  MatrixXd L = MatrixXd::Zero(Index(n), dim + covariates + 1), R = MatrixXd::Zero(Index(n), Index(k));
   for (std::size_t i = 0; i < n; ++i) {
-    L(Index(i), 0) = 1, L.row(Index(i)).tail(dim) = data.place[i].transpose();
+    L(Index(i), 0) = 1, L.row(Index(i)).segment(1, dim) = data.place[i].transpose();
+    if (covariates > 0) L.row(Index(i)).tail(covariates) = (*cov)[i].transpose();
     R.row(Index(i)) = data.residual[i].transpose();
   }
   const Eigen::ColPivHouseholderQR<MatrixXd> linear(L);
@@ -212,6 +285,7 @@ StructureTest joint_space_structure(const NoiseData& data, std::size_t neighbour
     return s / total;
   };
   out.ratio = statistic(nullptr);
+  out.covariate = covariate_dependence(nb, data, standardised_pseudos(nb, data.residual));
   std::mt19937 rng(seed);
   std::vector<std::size_t> perm(n);
   std::iota(perm.begin(), perm.end(), 0);

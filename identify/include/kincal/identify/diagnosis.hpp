@@ -144,6 +144,10 @@ struct Diagnosis {
   // (noise_estimate.hpp joint_space_structure): ratio < 1 and p < alpha is
   // structure, and the verdict is never consistent or explained then.
   double structure_ratio = 1, structure_p = 1;
+  // The covariate the final residual follows most between joint-space
+  // neighbours (noise_estimate.hpp): its name ("" without one), Spearman's ρ, p.
+  std::string structure_covariate;
+  double structure_covariate_rho = 0, structure_covariate_p = 1;
   std::vector<CollinearPair> collinear;  // candidate pairs nearly collinear with each other (beyond the base)
   double noise_urad = 0;     // 6-UPS: orientation σ (µrad); its rows are scaled to the position σ
   std::string noise_urad_source;
