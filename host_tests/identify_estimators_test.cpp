@@ -639,6 +639,39 @@ TEST(identifyEstimators, ShareInSpanMatchesTheProjectionOnAnIndependentSvd) {
   }
 }
 
+// The held-out rows' leverage the diagnosis's verdict allows for
+// (ScaledLeastSquares::mean_leverage) against the variance of x_tᵀ·δ̂ taken
+// by Monte Carlo: 4 000 noise draws through an independent solve (BDCSVD of
+// the column-scaled design); and on the fitted rows themselves rank / n
+// exactly.
+// Full rank with columns in units apart, and rank-deficient (the
+// minimum-norm solve: the unestimated direction adds no variance).
+TEST(identifyEstimators, MeanLeverageIsThePredictionVarianceOfHeldOutRows) {
+  std::mt19937_64 rng(47);
+  for (int trial = 0; trial < 2; ++trial) {
+    const Index n = 60, p = 8, nt = 25;
+    MatrixXd X = columns_in_units_apart(design_with_spectrum(n, p, 1.0, 1e3, rng));
+    if (trial == 1) X.col(3) = X.col(0) - 0.5 * X.col(6);
+    // Held-out rows partly outside the cal rows' cloud (extrapolation).
+    const MatrixXd Xt = 1.8 * columns_in_units_apart(design_with_spectrum(nt, p, 1.0, 1e3, rng));
+    const kincal::identify::detail::ScaledLeastSquares ls(X);
+    EXPECT_NEAR(ls.mean_leverage(X), double(ls.rank()) / double(n), 1e-10);
+    // The minimum norm is the column-scaled one (the estimate's definition;
+    // with the dependency, the held-out rows see the choice).
+    VectorXd d(p);
+    for (Index j = 0; j < p; ++j) d(j) = X.col(j).norm();
+    Eigen::BDCSVD<MatrixXd> svd(X * d.cwiseInverse().asDiagonal(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+    svd.setThreshold(1e-9);
+    const MatrixXd St = Xt * d.cwiseInverse().asDiagonal();
+    double sum = 0;
+    const int draws = 4000;
+    for (int k = 0; k < draws; ++k) sum += (St * svd.solve(gaussian(n, rng))).squaredNorm();
+    const double monte_carlo = sum / draws / double(nt);
+    EXPECT_NEAR(ls.mean_leverage(Xt), monte_carlo, 0.05 * monte_carlo) << "trial " << trial;
+    EXPECT_GT(ls.mean_leverage(Xt), double(ls.rank()) / double(n));  // extrapolated rows weigh more
+  }
+}
+
 // The damped descent's steps (DescentStep: corrected semi-normal equations)
 // against an independent solve of each problem: the SVD of the column-scaled
 // design for the undamped least squares (minimum norm), and a column-pivoted

@@ -6,8 +6,9 @@
 // carrying, in turn, nothing else, gearbox backlash, gravity compliance
 // (torques by virtual work through its own FK), thermal expansion of the
 // rods only, and one effect outside the library (a worn gear segment: a
-// quadratic error above a knee of motor 2's command, at two sizes). Measured: full poses
-// with 2 µm / 5 µrad noise at 120 random poses in rus6-ref's box, in motion
+// quadratic error above a knee of motor 2's command, at two sizes).
+// Measured: full poses with 2 µm / 5 µrad noise at 120 random poses in
+// rus6-ref's box, in motion
 // order, every third held out, a temperature per row (15–35 °C), the
 // approach directions from the motion order.
 //
@@ -16,6 +17,12 @@
 // identify --effects <accepted>`, `kincal compensate` of the held-out poses,
 // the independent machine driven by those commands (at each pose's
 // temperature, with the directions of the commands it is sent).
+//
+// The same cases measured by ONE tracker target in the tracker's own frame
+// (--instrument-frame: its registration identified with the model): the
+// error is where the target goes in the tracker's frame, the model's
+// registration · pose · target against the true tracker · reached pose ·
+// true target; 2 µm per target coordinate.
 //
 // The floor, as identify_independent_diagnosis_test.cpp measures it: the
 // same machine without the effect, the same poses and noise draws,
@@ -28,6 +35,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,30 +45,83 @@
 #include "independent/cli_loop.hpp"
 #include "independent/rus6_physical_simulator.hpp"
 #include "kincal/identify/files.hpp"
+#include "kincal/identify/robot.hpp"
+#include "tool_run.hpp"
 
 namespace {
 
 namespace ind = kincal::independent;
 using V6 = kincal::Vec6<double>;
-
-const std::string kDir = "identify_independent_rus6";
-const std::string kRobot = "rus6-ref";
+using V3 = kincal::Vec3<double>;
 
 using Diag = ind::Verdict;
 using ind::joined;
 
-Diag diagnose(const std::string& data, const std::string& tag, bool give_noise) {
-  return ind::diagnose_in(kDir, kRobot, data, tag, give_noise);
+// How the machine is measured, and so how the held-out error is taken.
+struct Measurement {
+  std::string dir;    // the working folder
+  std::string robot;  // built-in name or description file
+  std::string flags;  // appended to identify and diagnose
+  std::string noise;  // diagnose's noise options when it is given
+  ind::MeasurementSpec spec;
+  std::optional<V3> true_target;  // one target: where it goes in the tracker's frame
+  // Whether the 2 mrad worn gear is asserted `unexplained` with the noise
+  // estimated too. From one target it is not: the estimate takes the
+  // segment in (3.17 µm for 2 at 2 mrad, 4.98 µm at 4 mrad: it grows with
+  // the effect) and the held-out residual passes for noise; printed.
+  bool outside_told_with_estimated_noise = true;
+};
+
+Measurement full_poses() {
+  Measurement m;
+  m.dir = "identify_independent_rus6";
+  m.robot = "rus6-ref";
+  m.noise = " --noise-um 2 --noise-urad 5";
+  m.spec.sigma_mm = 2e-3;
+  m.spec.sigma_rad = 5e-6;
+  m.spec.seed = 5;
+  return m;
+}
+
+// A target 1.5 mm from where the description says, a tracker 2 m away and
+// turned (other numbers than identify_independent_rus6_tracker_test's).
+Measurement one_tracker_target() {
+  Measurement m;
+  m.dir = "identify_independent_rus6_one_target";
+  std::filesystem::create_directories(m.dir);
+  m.true_target = V3(55.0, 40.0, 28.0);
+  m.spec.targets = {*m.true_target};
+  m.spec.instrument_from_base = kincal::Pose<double>::from_xyz_rpy(-1500, 900, 300, -0.02, 0.04, -1.9);
+  m.spec.sigma_mm = 2e-3;
+  m.spec.seed = 6;
+  kincal::identify::Robot robot = kincal::identify::builtin_robot("rus6-ref");
+  robot.targets = {*m.true_target + V3(-1.0, 1.0, 0.5)};
+  m.robot = kincal_test::write_in(m.dir, "rus6_one_target.json", kincal::identify::robot_to_json(robot));
+  m.flags = " --instrument-frame";
+  m.noise = " --noise-um 2";
+  m.outside_told_with_estimated_noise = false;
+  return m;
 }
 
 // identify (with `effects`, "" = base only), compensate the held-out rows,
 // drive the machine: the held-out position RMS, µm (−1: refused).
-double held_out_rms(const std::string& data, const std::string& tag, const std::string& effects,
-                    const ind::Rus6PhysicalSimulator& machine, const ind::Dataset& d) {
-  const ind::IdentifyCompensate run = ind::identify_and_compensate(kDir, kRobot, data, tag, effects, d);
+double held_out_rms(const Measurement& m, const std::string& data, const std::string& tag,
+                    const std::string& effects, const ind::Rus6PhysicalSimulator& machine, const ind::Dataset& d) {
+  const ind::IdentifyCompensate run = ind::identify_and_compensate(m.dir, m.robot, data, tag, effects, d, m.flags);
   EXPECT_EQ(run.identify.code, 0) << tag << ": " << run.identify.err;
   EXPECT_EQ(run.compensate.code, 0) << tag << ": " << run.compensate.err;
   if (run.identify.code != 0 || run.compensate.code != 0) return -1;
+  // With one target: the model's promise, registration · pose · target.
+  kincal::Pose<double> registration;
+  V3 target = V3::Zero();
+  if (m.true_target) {
+    const nlohmann::json j = nlohmann::json::parse(kincal::identify::read_text_file(m.dir + "/" + tag + "_model.json"));
+    std::map<std::string, double> inst;
+    for (const auto& e : j.at("instrument")) inst[e.at("name").get<std::string>()] = e.at("value").get<double>();
+    registration = kincal::Pose<double>::from_xyz_rpy(inst.at("reg_x"), inst.at("reg_y"), inst.at("reg_z"),
+                                                      inst.at("reg_rx"), inst.at("reg_ry"), inst.at("reg_rz"));
+    target = V3(inst.at("t1x"), inst.at("t1y"), inst.at("t1z"));
+  }
   kincal::identify::PoseTableOptions o;
   o.joint_count = 6;
   const kincal::identify::PoseTable table = kincal::identify::read_pose_table(run.joints, o);
@@ -83,7 +145,12 @@ double held_out_rms(const std::string& data, const std::string& tag, const std::
     const ind::Rus6Reach r = machine.fk(q, in, asked);
     EXPECT_TRUE(r.ok) << tag << " row " << k;
     if (!r.ok) continue;
-    sum += 1e6 * (r.pose.p - asked.p).squaredNorm();
+    if (m.true_target)
+      sum += 1e6 * (m.spec.instrument_from_base.transform(r.pose.transform(*m.true_target)) -
+                    registration.transform(asked.transform(target)))
+                       .squaredNorm();
+    else
+      sum += 1e6 * (r.pose.p - asked.p).squaredNorm();
     ++n;
   }
   return n > 0 ? std::sqrt(sum / n) : -1;
@@ -127,8 +194,8 @@ TEST(IndependentRus6, TheSimulatorAgreesWithItself) {
   }
 }
 
-TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
-  std::filesystem::create_directories(kDir);
+void each_effect_is_named_and_compensated(const Measurement& m) {
+  std::filesystem::create_directories(m.dir);
   V6 half;
   half << 40, 40, 40, 0.17, 0.17, 0.17;
   const std::vector<V6> poses =
@@ -144,10 +211,6 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
     }
   }
   const ind::Rus6PhysicalErrors geometry = ind::random_rus6_errors(0.05, 5e-4, 17);
-  ind::MeasurementSpec spec;
-  spec.sigma_mm = 2e-3;
-  spec.sigma_rad = 5e-6;
-  spec.seed = 5;
   // Motor 2's commands over the design, for the outside effect's knee.
   std::vector<double> q2;
   for (const V6& p : poses) {
@@ -203,13 +266,15 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
     const Case& k = cases[c];
     const std::string tag = "case" + std::to_string(c);
     const ind::Rus6PhysicalSimulator machine(geometry, k.effects);
-    const ind::Dataset d = ind::make_rus6_dataset(machine, poses, spec, temps, roles);
+    const ind::Dataset d = ind::make_rus6_dataset(machine, poses, m.spec, temps, roles);
     EXPECT_TRUE(d.skipped.empty()) << k.name;
-    const std::string data = kDir + "/" + tag + "_measured.csv";
+    const std::string data = m.dir + "/" + tag + "_measured.csv";
     ind::write_measurement_csv_file(data, d);
-    const Diag given = diagnose(data, tag, true), est = diagnose(data, tag, false);
-    const double base = held_out_rms(data, tag + "_base", "", machine, d);
-    const double comp = given.accepted.empty() ? base : held_out_rms(data, tag + "_acc", joined(given.accepted), machine, d);
+    const Diag given = ind::diagnose_in(m.dir, m.robot, data, tag, true, m.flags, m.noise),
+               est = ind::diagnose_in(m.dir, m.robot, data, tag, false, m.flags);
+    const double base = held_out_rms(m, data, tag + "_base", "", machine, d);
+    const double comp =
+        given.accepted.empty() ? base : held_out_rms(m, data, tag + "_acc", joined(given.accepted), machine, d);
     if (c == 0) floor_um = base;
     std::printf("  %-36s | %-12s %-11s | %-12s %-9s %4.2f/%4.1f | %8.3f %8.3f %6.2f\n", k.name.c_str(),
                 given.verdict.c_str(), joined(given.accepted).c_str(), est.verdict.c_str(),
@@ -222,7 +287,9 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
     } else if (k.truth == "outside") {
       // Unexplained both ways (cyclic takes part of it).
       EXPECT_EQ(given.verdict, "unexplained") << k.name;
-      EXPECT_EQ(est.verdict, "unexplained") << k.name;
+      if (m.outside_told_with_estimated_noise) {
+        EXPECT_EQ(est.verdict, "unexplained") << k.name;
+      }
     } else if (k.truth == "outside:small") {
       EXPECT_EQ(given.verdict, "unexplained") << k.name;
     } else if (k.truth == "outside:thermal") {
@@ -250,6 +317,14 @@ TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
       EXPECT_LE(comp, 1.25 * floor_um) << k.name;
     }
   }
+}
+
+TEST(IndependentRus6, EachEffectIsNamedAndCompensatedNearTheFloorWithNoise) {
+  each_effect_is_named_and_compensated(full_poses());
+}
+
+TEST(IndependentRus6, OneTrackerTargetEachEffectIsNamedAndCompensated) {
+  each_effect_is_named_and_compensated(one_tracker_target());
 }
 
 }  // namespace

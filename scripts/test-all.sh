@@ -79,6 +79,7 @@ sanitize_skip_tests=(
   'IndependentHybrid.MillimetreErrorsAreAbsorbedByTheExactModel'
   'IndependentEffects.StewartClearance'
   'IndependentRus6.EachEffectIsNamedAndCompensatedNearTheFloorWithNoise'
+  'IndependentRus6.OneTrackerTargetEachEffectIsNamedAndCompensated'
 # The slowest of the rest (20-150 s each under the sanitizers, at most 4 s in
 # Release; CI's budget, docs/benchmarks.md "Build time (CI)"), each with a
 # shorter test of the same path that stays here:

@@ -66,8 +66,9 @@ inline std::string held_out_poses_csv(const Dataset& d, std::vector<const Datase
 
 
 // The loop's two commands in `dir`: `kincal identify` of `data` (with
-// `effects`; "" = the base only) into <tag>_model.json, then, if it
-// succeeded, `kincal compensate` of d's held-out rows into <tag>_joints.csv.
+// `effects`; "" = the base only; `flags` appended, e.g. --instrument-frame)
+// into <tag>_model.json, then, if it succeeded, `kincal compensate` of d's
+// held-out rows into <tag>_joints.csv.
 struct IdentifyCompensate {
   kincal_test::ToolRun identify, compensate;  // compensate.code stays -1 when identify failed
   std::vector<const DatasetRow*> test;        // the held-out rows, in the joints file's order
@@ -75,11 +76,12 @@ struct IdentifyCompensate {
 };
 inline IdentifyCompensate identify_and_compensate(const std::string& dir, const std::string& robot,
                                                   const std::string& data, const std::string& tag,
-                                                  const std::string& effects, const Dataset& d) {
+                                                  const std::string& effects, const Dataset& d,
+                                                  const std::string& flags = "") {
   IdentifyCompensate r;
   const std::string model = dir + "/" + tag + "_model.json";
   r.identify = kincal_test::run_tool_in(dir, "identify --robot " + robot + " --data " + data + " --out " + model +
-                                                 (effects.empty() ? "" : " --effects " + effects));
+                                                 (effects.empty() ? "" : " --effects " + effects) + flags);
   if (r.identify.code != 0) return r;
   const std::string poses_path = kincal_test::write_in(dir, tag + "_test_poses.csv", held_out_poses_csv(d, r.test));
   r.joints = dir + "/" + tag + "_joints.csv";
@@ -88,8 +90,9 @@ inline IdentifyCompensate identify_and_compensate(const std::string& dir, const 
   return r;
 }
 
-// `kincal diagnose` of `data` in `dir` with the noise given (2 µm / 5 µrad)
-// or estimated: the verdict, the accepted effects and the noise it used.
+// `kincal diagnose` of `data` in `dir` with the noise given (`noise`, by
+// default 2 µm / 5 µrad) or estimated, `flags` appended: the verdict, the
+// accepted effects and the noise it used.
 struct Verdict {
   std::string verdict;
   std::vector<std::string> accepted;
@@ -97,12 +100,12 @@ struct Verdict {
   bool ok = false;
 };
 inline Verdict diagnose_in(const std::string& dir, const std::string& robot, const std::string& data,
-                           const std::string& tag, bool give_noise) {
+                           const std::string& tag, bool give_noise, const std::string& flags = "",
+                           const std::string& noise = " --noise-um 2 --noise-urad 5") {
   Verdict d;
   const std::string json = dir + "/" + tag + (give_noise ? "_diag_given.json" : "_diag_est.json");
   const kincal_test::ToolRun r = kincal_test::run_tool_in(
-      dir, "diagnose --robot " + robot + " --data " + data + " --json " + json +
-               (give_noise ? " --noise-um 2 --noise-urad 5" : ""));
+      dir, "diagnose --robot " + robot + " --data " + data + " --json " + json + (give_noise ? noise : "") + flags);
   EXPECT_EQ(r.code, 0) << tag << ": " << r.err;
   if (r.code != 0) return d;
   const nlohmann::json j = nlohmann::json::parse(identify::read_text_file(json));

@@ -33,6 +33,14 @@ ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scale(
 
 VectorXd ScaledLeastSquares::solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
 
+// Σ_t ‖x_tᵀ·X⁺‖² / rows = ‖Xt·D⁻¹·S⁺‖²_F / rows, S = X·D⁻¹ (X⁺ = D⁻¹·S⁺ at
+// the solve's rank).
+double ScaledLeastSquares::mean_leverage(const MatrixXd& Xt) const {
+  if (Xt.rows() == 0) return 0.0;
+  const MatrixXd St = Xt * scale_.cwiseInverse().asDiagonal();
+  return (St * cod_.pseudoInverse()).squaredNorm() / double(Xt.rows());
+}
+
 AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X0_(X0), scale0_(column_scale(X0)) {
   qr0_.compute(X0 * scale0_.cwiseInverse().asDiagonal());
   const Index p0 = X0.cols();

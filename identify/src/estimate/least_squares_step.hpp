@@ -23,6 +23,10 @@ class ScaledLeastSquares {
   explicit ScaledLeastSquares(const Eigen::MatrixXd& X);
   Eigen::VectorXd solve(const Eigen::VectorXd& y) const;
   Eigen::Index rank() const { return cod_.rank(); }
+  // The mean leverage of rows Xt (not among X's): the variance of x_tᵀ·δ̂
+  // over σ² (δ̂ = solve(y), y of noise σ) averaged over the rows — what the
+  // estimate's spread adds to a held-out residual's variance, σ²(1 + h).
+  double mean_leverage(const Eigen::MatrixXd& Xt) const;
 
  private:
   Eigen::VectorXd scale_;

@@ -148,6 +148,9 @@ struct Diagnosis {
   // neighbours (noise_estimate.hpp): its name ("" without one), Spearman's ρ, p.
   std::string structure_covariate;
   double structure_covariate_rho = 0, structure_covariate_p = 1;
+  // The held-out rows' mean leverage under the base model (their residual's
+  // variance is σ²(1 + h) for a complete model; the verdict allows that).
+  double test_leverage = 0;
   std::vector<CollinearPair> collinear;  // candidate pairs nearly collinear with each other (beyond the base)
   double noise_urad = 0;     // 6-UPS: orientation σ (µrad); its rows are scaled to the position σ
   std::string noise_urad_source;
