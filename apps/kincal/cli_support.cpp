@@ -138,19 +138,6 @@ void kincal_app::warn_unevaluated(const std::string& file, const ki::PoseErrorRe
 }
 
 void kincal_app::print_outliers(const std::string& file, const ki::OutlierScreen& screen, std::size_t nodes, bool keep) {
-  if (screen.flagged.empty()) {
-    std::cout << "  outliers: none (deleted-node F test, p < " << screen.p_threshold << ")\n";
-    return;
-  }
-  std::cout << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n"
-            << ki::describe_outliers(file, screen);
-  if (screen.systematic)
-    std::cout << "  still flagged after " << screen.flagged.size() << " of " << nodes
-              << " nodes were set aside: the misfit is systematic (an unmodelled effect, or data without noise), "
-                 "not a few bad nodes; no node is left out (kincal diagnose names the effect)\n";
-  else if (screen.excluded)
-    std::cout << "  the model is fitted without them (keep them with --keep-outliers)\n";
-  else if (keep)
-    std::cout << "  the model still uses every node (--keep-outliers)\n";
+  ki::print_outlier_screen(std::cout, file, screen, nodes, keep);
 }
 

@@ -43,4 +43,22 @@ std::string describe_outliers(const std::string& file, const OutlierScreen& scre
   return os.str();
 }
 
+void print_outlier_screen(std::ostream& os, const std::string& file, const OutlierScreen& screen, std::size_t nodes,
+                          bool keep) {
+  if (screen.flagged.empty()) {
+    os << "  outliers: none (deleted-node F test, p < " << screen.p_threshold << ")\n";
+    return;
+  }
+  os << "  nodes inconsistent with the others (set aside one at a time, most significant first):\n"
+     << describe_outliers(file, screen);
+  if (screen.systematic)
+    os << "  still flagged after " << screen.flagged.size() << " of " << nodes
+       << " nodes were set aside: the misfit is systematic (an unmodelled effect, or data without noise), "
+          "not a few bad nodes; no node is left out (kincal diagnose names the effect)\n";
+  else if (screen.excluded)
+    os << "  the model is fitted without them (keep them with --keep-outliers)\n";
+  else if (keep)
+    os << "  the model still uses every node (--keep-outliers)\n";
+}
+
 }  // namespace kincal::identify

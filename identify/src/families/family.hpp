@@ -30,6 +30,7 @@
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/effects.hpp"
 #include "kincal/identify/estimators.hpp"
+#include "kincal/identify/identify.hpp"
 #include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/parameters.hpp"
 #include "kincal/identify/robot.hpp"
@@ -243,6 +244,15 @@ class Family {
   // The family's error parameters as the target fit and the planner see
   // them (family_errors.hpp), for a robot with its limits opened.
   virtual std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const = 0;
+
+  // ---- its own pipeline (optional; identify.hpp)
+  // The options its pipeline refuses (InputError), before the data are read.
+  virtual void check_identify_options(const IdentifyOptions&) const {}
+  // Its own measurement identified by its own pipeline (the data the target
+  // fit does not read), the narrative on `narrative`. By default it has none:
+  // InputError naming the tracker targets (pipeline/identify.cpp).
+  virtual Identification identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
+                                      std::ostream& narrative) const;
 };
 
 // The family of a robot (every Robot has one; std::logic_error if its

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <algorithm>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -134,5 +135,10 @@ template <class Json> void add_outlier_fields(Json& j, const OutlierScreen& scre
 
 // One line per flagged node for a terminal: "FILE:LINE: node 'ID': F = …, p = …".
 std::string describe_outliers(const std::string& file, const OutlierScreen& screen);
+
+// The screen as identify and diagnose print it: none, or the flagged nodes
+// and what was done with them (of `nodes` cal nodes; `keep`: --keep-outliers).
+void print_outlier_screen(std::ostream& os, const std::string& file, const OutlierScreen& screen, std::size_t nodes,
+                          bool keep);
 
 }  // namespace kincal::identify

@@ -69,6 +69,8 @@ class HybridFamily final : public Family {
   HandGrid hand_grid() const override { return {1, false}; }
   std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const override;
   std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const override;  // hybrid_errors.cpp
+  Identification identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
+                              std::ostream& narrative) const override;
 };
 
 }  // namespace kincal::identify

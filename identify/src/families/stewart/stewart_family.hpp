@@ -53,6 +53,9 @@ class StewartFamily final : public Family {
   HandGrid hand_grid() const override { return {3, true}; }
   std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const override;
   std::unique_ptr<detail::FamilyErrors> errors(const Robot& open) const override;  // stewart_errors.cpp
+  void check_identify_options(const IdentifyOptions& options) const override;
+  Identification identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
+                              std::ostream& narrative) const override;
 };
 
 }  // namespace kincal::identify
