@@ -131,12 +131,6 @@ void kincal_app::warn_table_refusal(const ki::CalibrationModel& model, const ki:
   if (!w.empty()) warn(data.file + ": warning: " + w);
 }
 
-void kincal_app::warn_unevaluated(const std::string& file, const ki::PoseErrorReport& report) {
-  for (const ki::UnevaluatedRow& r : report.unevaluated)
-    warn(file + ":" + std::to_string(r.line) + ": warning: row '" + r.id + "': " + r.why +
-         "; its residual is left out of the tables");
-}
-
 void kincal_app::print_outliers(const std::string& file, const ki::OutlierScreen& screen, std::size_t nodes, bool keep) {
   ki::print_outlier_screen(std::cout, file, screen, nodes, keep);
 }

@@ -95,10 +95,6 @@ kincal::identify::PoseTable read_measurements(const kincal::identify::Robot& rob
 // robot description key that raises it. The model is written all the same.
 void warn_table_refusal(const kincal::identify::CalibrationModel& model, const kincal::identify::PoseTable& data);
 
-// One warning per measured row the model could not be evaluated at (a test
-// row whose commanded pose is out of reach), at its line.
-void warn_unevaluated(const std::string& file, const kincal::identify::PoseErrorReport& report);
-
 // The outlier screen (identify/outliers.hpp) as every command reports it:
 // the flagged nodes with file line and statistic, and what was done with
 // them (the JSON fields: identify::add_outlier_fields).
