@@ -23,10 +23,7 @@ namespace kincal::identify {
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-using detail::fmt;
-using detail::idx;
-using detail::validate_design;
-using detail::validate_y;
+using namespace detail;  // the shared checks and search (estimator_detail.hpp)
 
 std::string column_name(const LinearProblem& problem, Eigen::Index j) {
   if (!problem.names.empty() && j >= 0 && j < static_cast<Index>(problem.names.size())) {

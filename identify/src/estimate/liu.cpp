@@ -14,7 +14,7 @@ namespace kincal::identify {
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-using detail::golden_min;
+using namespace detail;  // the shared checks and search (estimator_detail.hpp)
 
 // ---- Liu parameter (seed 000 Eqs. (13), (14)) ------------------------------
 

@@ -20,12 +20,7 @@ namespace kincal::identify {
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-using detail::fmt;
-using detail::idx;
-using detail::validate_design;
-using detail::validate_y;
-using detail::choose_d;
-using detail::golden_min;
+using namespace detail;  // the shared checks and search (estimator_detail.hpp)
 
 // ---- PreparedDesign ----------------------------------------------------------
 
