@@ -754,9 +754,11 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   eo.alpha = 0;
   // The base at that fit's solution, on the effect-corrected data (refitting
   // it from seed 000's start cost the hybrid's diagnosis 169 M instructions
-  // for the same minimum; #13).
+  // for the same minimum; #13). Only its values and that base are read here:
+  // the fit's statistics are skipped.
   BaseModel moved;
-  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved, stepped_base.get());
+  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved, stepped_base.get(),
+                                                            detail::Statistics::Skipped);
   scale_orientation_rows(moved, orientation_factor);  // rows of orientation only
   bool same_nodes = moved.nodes.size() == base.nodes.size();
   for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
