@@ -310,7 +310,12 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
       X.middleRows(rows * Eigen::Index(k), rows) =
           full_design_rows(*family, current.errors, current.registration, current.targets, current.guesses[k].pose,
                            layout, reading);
-    design = X * N;
+    // No convention rows (full poses): N is the identity, and the product a
+    // 600 × 66 × 66 one per step of a 6-RUS fit for X itself.
+    if (C.rows() == 0)
+      design = X;
+    else
+      design = X * N;
     y = residual;
   };
   auto apply = [&](const Eigen::VectorXd& dphi) {
