@@ -802,6 +802,13 @@ void DiagnosisRun::rank_candidates() {
   d.ranking = ranked;
 }
 
+// An orthonormal basis of the span of A's columns, of A's rank by a
+// column-pivoted QR.
+MatrixXd column_space(const MatrixXd& A) {
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(A);
+  return MatrixXd(qr.householderQ()).leftCols(qr.rank());
+}
+
 // Candidates nearly collinear with each other (#31): `confounded` measures
 // an effect against the base; two effects can each stand out from the base
 // and still be one another's image (the hybrid's wrist scale and compliance),
@@ -810,9 +817,14 @@ void DiagnosisRun::rank_candidates() {
 // (unit) columns inside the span of the other's is the measure, both ways.
 void DiagnosisRun::name_collinear_candidates() {
   constexpr double kCollinear = 0.9;
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(cal.H);
-  const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(qr.rank());
-  std::vector<std::pair<std::string, MatrixXd>> beyond;  // each effect's columns beyond the base, unit norm
+  const MatrixXd Q = column_space(cal.H);
+  // Each effect's columns beyond the base (unit norm), and an orthonormal
+  // basis of their span: one QR per effect, not one per pair and direction.
+  struct Beyond {
+    std::string effect;
+    MatrixXd U, Q;
+  };
+  std::vector<Beyond> beyond;
   for (const Effect* e : candidates) {
     const MatrixXd& G = cal.G.at(e->name());
     MatrixXd R = G - Q * (Q.transpose() * G);
@@ -822,19 +834,17 @@ void DiagnosisRun::name_collinear_candidates() {
     if (keep.empty()) continue;
     MatrixXd U(R.rows(), Index(keep.size()));
     for (std::size_t j = 0; j < keep.size(); ++j) U.col(Index(j)) = R.col(keep[j]).normalized();
-    beyond.emplace_back(e->name(), std::move(U));
+    MatrixXd QU = column_space(U);
+    beyond.push_back({e->name(), std::move(U), std::move(QU)});
   }
-  auto share = [](const MatrixXd& A, const MatrixXd& B) {
-    const Eigen::ColPivHouseholderQR<MatrixXd> qb(B);
-    const MatrixXd QB = MatrixXd(qb.householderQ()).leftCols(qb.rank());
-    return (QB.transpose() * A).colwise().squaredNorm().mean();  // columns of A are unit
-  };
+  // The mean share of A's columns (unit) inside the span of B's.
+  auto share = [](const Beyond& A, const Beyond& B) { return (B.Q.transpose() * A.U).colwise().squaredNorm().mean(); };
   for (std::size_t a = 0; a < beyond.size(); ++a)
     for (std::size_t b = a + 1; b < beyond.size(); ++b) {
-      const double ab = share(beyond[a].second, beyond[b].second), ba = share(beyond[b].second, beyond[a].second);
+      const double ab = share(beyond[a], beyond[b]), ba = share(beyond[b], beyond[a]);
       if (std::max(ab, ba) < kCollinear) continue;
-      CollinearPair c = ab >= ba ? CollinearPair{beyond[a].first, beyond[b].first, ab}
-                                 : CollinearPair{beyond[b].first, beyond[a].first, ba};
+      CollinearPair c = ab >= ba ? CollinearPair{beyond[a].effect, beyond[b].effect, ab}
+                                 : CollinearPair{beyond[b].effect, beyond[a].effect, ba};
       char pct[32];
       std::snprintf(pct, sizeof pct, "%.1f %%", 100 * c.share);
       auto is_accepted = [&](const std::string& x) {
