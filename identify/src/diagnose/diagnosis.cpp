@@ -757,9 +757,11 @@ void DiagnosisRun::relinearise(const std::string& accepted_effect) {
   eo.alpha = 0;
   // The base at that fit's solution, on the effect-corrected data (refitting
   // it from seed 000's start cost the hybrid's diagnosis 169 M instructions
-  // for the same minimum; #13).
+  // for the same minimum; #13). Only its values and that base are read here:
+  // the fit's statistics are skipped.
   BaseModel moved;
-  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved, stepped_base.get());
+  const CalibrationModel m = detail::calibrate_with_effects(robot, data, accepted, eo, nullptr, &moved, stepped_base.get(),
+                                                            detail::Statistics::Skipped);
   scale_orientation_rows(moved, orientation_factor);  // rows of orientation only
   bool same_nodes = moved.nodes.size() == base.nodes.size();
   for (std::size_t k = 0; same_nodes && k < base.nodes.size(); ++k)
@@ -803,6 +805,18 @@ void DiagnosisRun::rank_candidates() {
   d.ranking = ranked;
 }
 
+// An orthonormal basis of the span of A's columns, of A's rank by a
+// column-pivoted QR: its Householder Q applied to the first rank unit
+// vectors, the thin factor. Forming the whole n × n Q and keeping its first
+// columns (600 × 600 for a 6-RUS's cal rows, six times per diagnosis) was
+// 79 M of the 471 M instructions of BM_DiagnoseRus6's diagnose(); the two
+// differ by the order of the rounding only (1e-17 in Q, 1e-15 relative in
+// the shares; #33).
+MatrixXd column_space(const MatrixXd& A) {
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(A);
+  return qr.householderQ() * MatrixXd::Identity(A.rows(), qr.rank());
+}
+
 // Candidates nearly collinear with each other (#31): `confounded` measures
 // an effect against the base; two effects can each stand out from the base
 // and still be one another's image (the hybrid's wrist scale and compliance),
@@ -811,9 +825,14 @@ void DiagnosisRun::rank_candidates() {
 // (unit) columns inside the span of the other's is the measure, both ways.
 void DiagnosisRun::name_collinear_candidates() {
   constexpr double kCollinear = 0.9;
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(cal.H);
-  const MatrixXd Q = MatrixXd(qr.householderQ()).leftCols(qr.rank());
-  std::vector<std::pair<std::string, MatrixXd>> beyond;  // each effect's columns beyond the base, unit norm
+  const MatrixXd Q = column_space(cal.H);
+  // Each effect's columns beyond the base (unit norm), and an orthonormal
+  // basis of their span: one QR per effect, not one per pair and direction.
+  struct Beyond {
+    std::string effect;
+    MatrixXd U, Q;
+  };
+  std::vector<Beyond> beyond;
   for (const Effect* e : candidates) {
     const MatrixXd& G = cal.G.at(e->name());
     MatrixXd R = G - Q * (Q.transpose() * G);
@@ -823,19 +842,17 @@ void DiagnosisRun::name_collinear_candidates() {
     if (keep.empty()) continue;
     MatrixXd U(R.rows(), Index(keep.size()));
     for (std::size_t j = 0; j < keep.size(); ++j) U.col(Index(j)) = R.col(keep[j]).normalized();
-    beyond.emplace_back(e->name(), std::move(U));
+    MatrixXd QU = column_space(U);
+    beyond.push_back({e->name(), std::move(U), std::move(QU)});
   }
-  auto share = [](const MatrixXd& A, const MatrixXd& B) {
-    const Eigen::ColPivHouseholderQR<MatrixXd> qb(B);
-    const MatrixXd QB = MatrixXd(qb.householderQ()).leftCols(qb.rank());
-    return (QB.transpose() * A).colwise().squaredNorm().mean();  // columns of A are unit
-  };
+  // The mean share of A's columns (unit) inside the span of B's.
+  auto share = [](const Beyond& A, const Beyond& B) { return (B.Q.transpose() * A.U).colwise().squaredNorm().mean(); };
   for (std::size_t a = 0; a < beyond.size(); ++a)
     for (std::size_t b = a + 1; b < beyond.size(); ++b) {
-      const double ab = share(beyond[a].second, beyond[b].second), ba = share(beyond[b].second, beyond[a].second);
+      const double ab = share(beyond[a], beyond[b]), ba = share(beyond[b], beyond[a]);
       if (std::max(ab, ba) < kCollinear) continue;
-      CollinearPair c = ab >= ba ? CollinearPair{beyond[a].first, beyond[b].first, ab}
-                                 : CollinearPair{beyond[b].first, beyond[a].first, ba};
+      CollinearPair c = ab >= ba ? CollinearPair{beyond[a].effect, beyond[b].effect, ab}
+                                 : CollinearPair{beyond[b].effect, beyond[a].effect, ba};
       char pct[32];
       std::snprintf(pct, sizeof pct, "%.1f %%", 100 * c.share);
       auto is_accepted = [&](const std::string& x) {

@@ -30,8 +30,11 @@ using Eigen::VectorXd;
 // Laser-tracker targets (target_calibration.hpp), either family, or the full
 // poses of a family whose own fit does not read them: per node the residuals,
 // their map M and the design rows in the convention's coordinates.
-BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en) {
-  const TargetCalibration cal = calibrate_targets(robot, data);
+BaseModel target_base(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& en,
+                      Statistics statistics) {
+  TargetCalibrationOptions options;
+  options.statistics = statistics == Statistics::Computed;
+  const TargetCalibration cal = calibrate_targets(robot, data, options);
   BaseModel base;
   base.description = std::string(robot.error_model()) + " from " +
                      (cal.full_pose ? std::string("full poses") : std::to_string(data.target_columns()) + " target(s)") +
@@ -139,7 +142,7 @@ BaseModel fit_base_for_effects(const Robot& robot, const PoseTable& data,
   const Family& family = family_of(robot);
   if (uses_target_model(robot, data) || !family.steps_base_with_effects()) {
     stepped.reset();
-    return fit_base(robot, data, nodes, EstimatorKind::Ols, true);
+    return fit_base(robot, data, nodes, EstimatorKind::Ols, true, 0.0, Statistics::Skipped);
   }
   // What the family's fit_base (OLS, finished) constructs, kept.
   stepped = family.stepped_base_fit(robot, data, nodes, EstimatorKind::Ols, 0.0);
@@ -147,8 +150,9 @@ BaseModel fit_base_for_effects(const Robot& robot, const PoseTable& data,
 }
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
-                   std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k) {
-  if (uses_target_model(robot, fit_data)) return target_base(robot, fit_data, nodes);
+                   std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k,
+                   Statistics statistics) {
+  if (uses_target_model(robot, fit_data)) return target_base(robot, fit_data, nodes, statistics);
   return family_of(robot).fit_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
 }
 

@@ -110,6 +110,14 @@ class SteppedBaseFit {
   virtual void finish(BaseModel& base, const std::string& data_file, int steps) const = 0;
 };
 
+// Whether a base fit computes the statistics beyond its solution — the
+// fitted model's standard errors (BaseModel::model) and the rest of the
+// target fit's (TargetCalibrationOptions::statistics) — or skips them where
+// only the linearisation at the solution is used: the diagnosis's fits,
+// and the passes of the alternation before its last. The target fit's alone
+// (a family's own pipeline computes its statistics anyway).
+enum class Statistics { Computed, Skipped };
+
 // The family's own pipeline (Family::fit_base), or the target fit for target
 // data (either family).
 // `fit_data`: the table the base model is fitted on and compared with (the
@@ -123,7 +131,7 @@ class SteppedBaseFit {
 // seed 000's fine-stage GCV.
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
                    std::optional<EstimatorKind> estimator = std::nullopt, bool finish_least_squares = false,
-                   double ridge_k = 0);
+                   double ridge_k = 0, Statistics statistics = Statistics::Computed);
 
 // Residuals and base design rows of the nodes of one role (test or cal),
 // stacked in node order.
@@ -147,8 +155,8 @@ void complete_at_solution(const SteppedBaseFit& fit, const PoseTable& data, bool
 // stepped fit (the hybrid's).
 BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate);
 
-// fit_base by OLS to the minimum, as a diagnosis fits it before it tests and
-// accepts effects, and in `stepped` the family's stepped fit that made it
+// fit_base by OLS to the minimum (its statistics skipped), as a diagnosis
+// fits it before it tests and accepts effects, and in `stepped` the family's stepped fit that made it
 // (nullptr where the family alternates, or for target data). The joint fit of
 // base and accepted effects on the same table starts from it
 // (calibrate_with_effects' `from`) instead of constructing its own: the
@@ -173,10 +181,12 @@ PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,
 // minimum over base and effects, hence over the base with the effects held.
 // `from` (if given): the stepped fit fit_base_for_effects made on the same
 // `data`, used by the first round instead of a new one (its start() resets
-// the iterate; OLS options only, the ones it was made with).
+// the iterate; OLS options only, the ones it was made with). `statistics`:
+// of the final base fit (Skipped: the model's standard errors are NaN).
 CalibrationModel calibrate_with_effects(const Robot& robot, const PoseTable& data, const std::vector<std::string>& effects,
                                         const EffectCalibrationOptions& options, EffectCalibrationReport* report,
-                                        BaseModel* base_out, SteppedBaseFit* from = nullptr);
+                                        BaseModel* base_out, SteppedBaseFit* from = nullptr,
+                                        Statistics statistics = Statistics::Computed);
 
 // Effect columns of the nodes of `base` whose role matches `test`, stacked
 // like their residuals, at the effect values `at` (nullptr: every value zero,

@@ -133,10 +133,12 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
 // The alternation of the header comment from `values` (warm start): fit
 // the base on the effect-corrected data, one joint linear step on [H G] for
 // the effects, repeat. Parameters with held[e][j] stay where they are (their
-// columns are left out of the step).
+// columns are left out of the step). `statistics`: of the base fit returned
+// (a pass before it needs only its linearisation).
 detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std::vector<std::optional<EffectNode>>& nodes,
                             const std::vector<const Effect*>& list, const std::map<std::string, std::vector<bool>>& held,
-                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep) {
+                            const EffectCalibrationOptions& options, EffectValues& values, EffectCalibrationReport& rep,
+                            detail::Statistics statistics) {
   detail::BaseModel base;
   EffectValues previous = values;
   bool halved = false;
@@ -144,8 +146,10 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   for (int pass = 0; pass < options.max_passes; ++pass) {
     const PoseTable corrected = detail::effect_corrected_table(robot, data, nodes, values.to_core(robot));
     // The base is fitted to its least-squares minimum (what the linear [H G]
-    // step assumes), here and for the final model.
-    base = detail::fit_base(robot, corrected, nodes, EstimatorKind::Ols, true);
+    // step assumes), here and for the final model. Without effects this fit
+    // is the one returned.
+    base = detail::fit_base(robot, corrected, nodes, EstimatorKind::Ols, true, 0.0,
+                            list.empty() ? statistics : detail::Statistics::Skipped);
     MatrixXd H;
     VectorXd y;
     stack(base, false, H, y);
@@ -187,7 +191,7 @@ detail::BaseModel alternate(const Robot& robot, const PoseTable& data, const std
   // the loop may belong to an update that was undone or not yet applied).
   if (!list.empty())
     base = detail::fit_base(robot, detail::effect_corrected_table(robot, data, nodes, values.to_core(robot)), nodes,
-                            EstimatorKind::Ols, true);
+                            EstimatorKind::Ols, true, 0.0, statistics);
   return base;
 }
 
@@ -300,7 +304,7 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
                                                 const std::vector<std::string>& effects,
                                                 const EffectCalibrationOptions& options,
                                                 EffectCalibrationReport* report, BaseModel* base_out,
-                                                SteppedBaseFit* from) {
+                                                SteppedBaseFit* from, Statistics statistics) {
   std::vector<const Effect*> list;
   for (const std::string& name : effects) {
     const Effect* e = find_effect(robot, name);
@@ -350,7 +354,7 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
   const bool choose_k = options.estimator != EstimatorKind::Ols && !(options.ridge_k > 0);
   auto fit = [&]() {
     if (!family.steps_base_with_effects() || uses_target_model(robot, data)) {  // target data: the target fit, either family
-      detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep);
+      detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep, statistics);
       rep.base = uses_target_model(robot, data) ? b.description : std::string(family.base_fit()) + " (OLS)";
       return b;
     }

@@ -310,7 +310,12 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
       X.middleRows(rows * Eigen::Index(k), rows) =
           full_design_rows(*family, current.errors, current.registration, current.targets, current.guesses[k].pose,
                            layout, reading);
-    design = X * N;
+    // No convention rows (full poses): N is the identity, and the product a
+    // 600 × 66 × 66 one per step of a 6-RUS fit for X itself.
+    if (C.rows() == 0)
+      design = X;
+    else
+      design = X * N;
     y = residual;
   };
   auto apply = [&](const Eigen::VectorXd& dphi) {
@@ -361,15 +366,23 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   out.targets = current.targets;
 
   // Rank, conditioning, covariance: the SVD of the column-scaled design.
+  // Without the statistics the singular values alone decide the rank; V,
+  // half of the SVD's cost, is computed only where the check fails, to name
+  // the combination.
   const Eigen::VectorXd scale = A.colwise().norm().cwiseMax(1e-300).transpose();
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(A * scale.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
-  const Eigen::VectorXd& s = svd.singularValues();
+  const Eigen::MatrixXd scaled = A * scale.cwiseInverse().asDiagonal();
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled, options.statistics ? Eigen::ComputeThinV : 0);
+  const Eigen::VectorXd s = svd.singularValues();
   out.condition_number = s(0) / s(s.size() - 1);
   out.rank = int((s.array() > effective_rcond(kDefaultRcond, n, p) * s(0)).count());
   out.nodes = nodes.size();
   out.sigma_mm = std::sqrt(y.squaredNorm() / double(std::max<Eigen::Index>(1, n - p)));
-  const Eigen::MatrixXd NV = N * (scale.cwiseInverse().asDiagonal() * svd.matrixV());  // x per singular direction
+  auto directions = [&]() -> Eigen::MatrixXd {  // x per singular direction
+    if (!svd.computeV()) svd.compute(scaled, Eigen::ComputeThinV);
+    return N * (scale.cwiseInverse().asDiagonal() * svd.matrixV());
+  };
   if (out.rank < p) {
+    const Eigen::MatrixXd NV = directions();
     const WeakCombination w = weakest_combinations(NV.col(p - 1) * NV.col(p - 1).transpose(), unit_weights(layout),
                                                    names, 1).front();
     throw InputError(data.file, 0, 0,
@@ -379,6 +392,14 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
                          "); not determined: " + describe(w) + ". Poses that also turn the " +
                          nominal.target_body() + ", or more targets, separate them");
   }
+  if (!options.statistics) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    out.standard_error = Eigen::VectorXd::Constant(layout.family, nan);
+    out.registration_standard_error.setConstant(nan);
+    out.target_standard_error.assign(std::size_t(layout.targets), Vec3<double>::Constant(nan));
+    return out;
+  }
+  const Eigen::MatrixXd NV = directions();
   const Eigen::MatrixXd covariance =
       out.sigma_mm * out.sigma_mm * NV * s.array().square().inverse().matrix().asDiagonal() * NV.transpose();
   const Eigen::VectorXd se = covariance.diagonal().cwiseMax(0.0).cwiseSqrt();

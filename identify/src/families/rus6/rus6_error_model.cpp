@@ -79,9 +79,11 @@ Rus6Geometry<double> rus6_with_errors(const Rus6Geometry<double>& nominal, const
   return r.rus6();
 }
 
-bool rus6_error_twists(const Rus6Geometry<double>& nominal, const Eigen::VectorXd& x, const Pose<double>& pose,
-                       Eigen::Matrix<double, 6, Eigen::Dynamic>& T) {
-  const Rus6Geometry<double> g = x.size() > 0 ? rus6_with_errors(nominal, x) : nominal;
+namespace {
+
+// rus6_error_twists of the machine g = nominal + x, given g.
+bool error_twists(const Rus6Geometry<double>& nominal, const Rus6Geometry<double>& g, const Pose<double>& pose,
+                  Eigen::Matrix<double, 6, Eigen::Dynamic>& T) {
   Vec6<double> q;
   Rus6Legs<double> legs;
   if (rus6_ik(g, pose, q, nullptr, &legs) != Status::Ok) return false;
@@ -113,6 +115,13 @@ bool rus6_error_twists(const Rus6Geometry<double>& nominal, const Eigen::VectorX
   return T.allFinite();
 }
 
+}  // namespace
+
+bool rus6_error_twists(const Rus6Geometry<double>& nominal, const Eigen::VectorXd& x, const Pose<double>& pose,
+                       Eigen::Matrix<double, 6, Eigen::Dynamic>& T) {
+  return error_twists(nominal, x.size() > 0 ? rus6_with_errors(nominal, x) : nominal, pose, T);
+}
+
 namespace detail {
 namespace {
 
@@ -121,7 +130,7 @@ namespace {
 // shaft points) with targets.
 class Rus6Errors final : public FamilyErrors {
  public:
-  explicit Rus6Errors(const Robot& robot) : robot_(robot), g_(robot.rus6()) {}
+  explicit Rus6Errors(const Robot& robot) : robot_(robot), g_(robot.rus6()), with_errors_(g_) {}
   int size() const override { return kRus6ParameterCount; }
   std::vector<std::string> names() const override { return parameter_names(robot_); }
   std::vector<std::string> units() const override {
@@ -131,13 +140,13 @@ class Rus6Errors final : public FamilyErrors {
   }
   NodeGuess start(const Pose<double>& commanded) const override { return {commanded, {}}; }
   bool pose(const Eigen::VectorXd& errors, const Vec6<double>& q, NodeGuess& guess, Pose<double>& pose) const override {
-    if (rus6_fk(rus6_with_errors(g_, errors), q, guess.pose, pose).status != Status::Ok) return false;
+    if (rus6_fk(with_errors(errors), q, guess.pose, pose).status != Status::Ok) return false;
     guess.pose = pose;
     return true;
   }
   Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const override {
     Eigen::Matrix<double, 6, Eigen::Dynamic> T;
-    if (!rus6_error_twists(g_, errors, pose, T)) T.setConstant(6, kRus6ParameterCount, std::nan(""));
+    if (!error_twists(g_, with_errors(errors), pose, T)) T.setConstant(6, kRus6ParameterCount, std::nan(""));
     return T;
   }
   bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const override {
@@ -167,8 +176,23 @@ class Rus6Errors final : public FamilyErrors {
   }
 
  private:
+  // The machine g_ + errors: a fit asks for the same errors at every node of
+  // an evaluation and of a linearisation, and rus6_with_errors applies the
+  // 66 parameters through their specs (a Robot each time): kept for the last
+  // errors asked for (20 M instructions of a 6-RUS diagnosis; #33). One fit
+  // owns its FamilyErrors (family_errors()), so no two threads share it.
+  const Rus6Geometry<double>& with_errors(const Eigen::VectorXd& errors) const {
+    if (!(errors.size() == errors_.size() && errors == errors_)) {
+      with_errors_ = rus6_with_errors(g_, errors);
+      errors_ = errors;
+    }
+    return with_errors_;
+  }
+
   Robot robot_;
   Rus6Geometry<double> g_;
+  mutable Eigen::VectorXd errors_;              // empty: g_ itself
+  mutable Rus6Geometry<double> with_errors_;
 };
 
 }  // namespace
