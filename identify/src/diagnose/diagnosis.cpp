@@ -387,8 +387,9 @@ class DiagnosisRun {
   void set_noise();
   void stack_candidates();
   void fit_base_columns();
-  // `test_leverage`: the held-out rows' mean leverage under the fit
-  // (< 0: the cal rows' mean, rank / n_cal).
+  // `test_leverage`: the held-out rows' mean leverage to allow for (the
+  // verdict passes the base model's, judge()); < 0: the cal rows' mean,
+  // rank / n_cal.
   bool consistent_rms(double rss, Index rank, double test_ss, Index test_n, double test_leverage = -1) const;
   bool consistent(const FitResult& f) const { return consistent_rms(f.rss, f.rank, f.r_test.squaredNorm(), f.r_test.size()); }
   double required_gain(const FitResult& f) const;
