@@ -36,6 +36,7 @@
 #include "kincal/identify/joint_limits.hpp"
 #include "kincal/identify/measurement_model.hpp"
 #include "kincal/identify/robot.hpp"
+#include "kincal/identify/target_calibration.hpp"
 #include "large_hexapod.hpp"
 
 namespace ki = kincal::identify;
@@ -58,7 +59,7 @@ std::vector<Pose<double>> poses_around_home(const ki::Robot& robot, int count, u
   const ki::Family& family = ki::family_of(robot);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const double size = 0.05 * family.reach(robot);
+  const double size = 0.05 * family.kinematics().reach(robot);
   Vec6<double> lo, hi;
   robot.joint_limits(lo, hi);
   std::vector<Pose<double>> out{robot.home_pose()};
@@ -68,7 +69,7 @@ std::vector<Pose<double>> poses_around_home(const ki::Robot& robot, int count, u
     for (int d = 3; d < 6; ++d) x(d) += 0.05 * unit(rng);
     const Pose<double> pose = Pose<double>::from_xyz_rpy(x);
     Vec6<double> q;
-    if (family.inverse(robot, pose, q) != Status::Ok) continue;
+    if (family.kinematics().inverse(robot, pose, q) != Status::Ok) continue;
     if (((q.array() < lo.array()) || (q.array() > hi.array())).any()) continue;
     out.push_back(pose);
   }
@@ -95,12 +96,51 @@ class FamilySeam : public ::testing::TestWithParam<std::string> {
 TEST_P(FamilySeam, TheRegistryFindsTheFamilyByRobotAndByName) {
   EXPECT_STREQ(family.name(), robot.family());
   EXPECT_EQ(ki::family_named(family.name()), &family);
-  EXPECT_TRUE(family.describes(robot));
+  EXPECT_TRUE(family.description().describes(robot));
   EXPECT_EQ(ki::family_named("no-such-family"), nullptr);
   EXPECT_NE(ki::family_names().find(family.name()), std::string::npos);
   // Another family's robot is not this family's.
   const ki::Robot other = robot_named(robot.is_stewart() ? "hybrid-seed000" : "stewart-seed001");
-  EXPECT_FALSE(family.describes(other));
+  EXPECT_FALSE(family.description().describes(other));
+}
+
+// Who reads a table: the family's own pipeline or the family-free target
+// fit, never both and never neither. What each family is expected to do is
+// written here, by hand (the 6-UPS's own pipeline reads full poses, the
+// hybrid's reads its gauge's targets, the 6-RUS has none), not read off
+// the family; the library's router (uses_target_model) must agree with it.
+TEST_P(FamilySeam, EachTableHasOneReaderTheOwnPipelineOrTheTargetFit) {
+  ki::PoseTable poses, targets;
+  poses.has_measured = true;
+  targets.has_targets = true;
+  const std::string kind = family.name();
+  const bool own_reads_poses = kind == ki::kStewartFamily;
+  const bool own_reads_targets = kind == ki::kHybridFamily;
+  EXPECT_EQ(family.own_pipeline() != nullptr, own_reads_poses || own_reads_targets);
+  EXPECT_EQ(family.pipeline_reading(robot, poses) != nullptr, own_reads_poses);
+  EXPECT_EQ(family.pipeline_reading(robot, targets) != nullptr, own_reads_targets);
+  EXPECT_EQ(ki::uses_target_model(robot, poses), !own_reads_poses);
+  EXPECT_EQ(ki::uses_target_model(robot, targets), !own_reads_targets);
+  for (const ki::PoseTable* t : {&poses, &targets}) {
+    EXPECT_EQ(family.measurement().missing_measurement(robot, *t), "");
+    if (const ki::FamilyPipeline* reader = family.pipeline_reading(robot, *t)) {
+      EXPECT_EQ(reader, family.own_pipeline());
+      EXPECT_STRNE(reader->base_fit(), "");
+    }
+  }
+  // A table with neither is refused with a message, whoever would read it.
+  EXPECT_NE(family.measurement().missing_measurement(robot, ki::PoseTable{}), "");
+  // Targets in the instrument's frame go to the target fit, whoever reads
+  // them in the base frame (only it estimates the registration).
+  ki::PoseTable in_tracker = targets;
+  in_tracker.in_instrument_frame = true;
+  EXPECT_EQ(family.pipeline_reading(robot, in_tracker), nullptr);
+  EXPECT_TRUE(ki::uses_target_model(robot, in_tracker));
+  // The description's own targets send even the hybrid's targets to the
+  // target fit (they are not its gauge).
+  ki::Robot with_targets = robot;
+  with_targets.targets = {kincal::Vec3<double>(10, 20, 30)};
+  EXPECT_EQ(family.pipeline_reading(with_targets, targets), nullptr);
 }
 
 TEST_P(FamilySeam, DescriptionRoundTripsThroughWriteAndParse) {
@@ -113,11 +153,11 @@ TEST_P(FamilySeam, DescriptionRoundTripsThroughWriteAndParse) {
 
 TEST_P(FamilySeam, HomeIsReachableInsideTheLimits) {
   Vec6<double> lo, hi, q;
-  family.joint_limits(robot, lo, hi);
-  const std::vector<ki::PassiveLimit> passive_limits = family.passive_limits(robot);
+  family.kinematics().joint_limits(robot, lo, hi);
+  const std::vector<ki::PassiveLimit> passive_limits = family.kinematics().passive_limits(robot);
   ASSERT_LE(passive_limits.size(), 4u);
   double passive[4] = {0, 0, 0, 0};
-  ASSERT_EQ(family.inverse(robot, family.home_pose(robot), q, nullptr, passive), Status::Ok);
+  ASSERT_EQ(family.kinematics().inverse(robot, family.kinematics().home_pose(robot), q, nullptr, passive), Status::Ok);
   for (int i = 0; i < 6; ++i) {
     EXPECT_GE(q(i), lo(i)) << "joint " << i + 1;
     EXPECT_LE(q(i), hi(i)) << "joint " << i + 1;
@@ -126,9 +166,9 @@ TEST_P(FamilySeam, HomeIsReachableInsideTheLimits) {
     EXPECT_GE(passive[k], passive_limits[k].lo) << passive_limits[k].name;
     EXPECT_LE(passive[k], passive_limits[k].hi) << passive_limits[k].name;
   }
-  EXPECT_GT(family.reach(robot), 0.0);
-  EXPECT_GT(family.characteristic_length(robot), 0.0);
-  const kincal::TableBounds<double> bounds = family.default_bounds(robot);
+  EXPECT_GT(family.kinematics().reach(robot), 0.0);
+  EXPECT_GT(family.kinematics().characteristic_length(robot), 0.0);
+  const kincal::TableBounds<double> bounds = family.table().default_bounds(robot);
   for (int i = 0; i < 6; ++i) EXPECT_GT(bounds.max_correction[i], 0.0);
 }
 
@@ -138,9 +178,9 @@ TEST_P(FamilySeam, ForwardJacobianMatchesFiniteDifferencesOfTheFamilysOwnPose) {
   for (const Pose<double>& commanded : poses_around_home(robot, 5, 11)) {
     Vec6<double> q;
     Mat6<double> J;
-    ASSERT_TRUE(family.forward_jacobian(robot, commanded, q, J));
+    ASSERT_TRUE(family.kinematics().forward_jacobian(robot, commanded, q, J));
     for (int i = 0; i < 6; ++i) {
-      const double h = family.revolute(i) ? 1e-6 : 1e-4;  // rad, mm
+      const double h = family.kinematics().revolute(i) ? 1e-6 : 1e-4;  // rad, mm
       Vec6<double> up = q, down = q;
       up(i) += h;
       down(i) -= h;
@@ -164,7 +204,7 @@ TEST_P(FamilySeam, ErrorTwistsMatchFiniteDifferencesOfTheFamilysOwnPose) {
     if (n <= 60 || j < 6 || j % 7 == 0) columns.push_back(j);
   for (const Pose<double>& commanded : poses_around_home(robot, 3, 5)) {
     Vec6<double> q;
-    ASSERT_EQ(family.inverse(ki::without_limits(robot), commanded, q), Status::Ok);
+    ASSERT_EQ(family.kinematics().inverse(ki::without_limits(robot), commanded, q), Status::Ok);
     const Pose<double> reached = pose_at(*errors, commanded, q, zero);
     const Eigen::MatrixXd T = errors->twist_columns(zero, reached);
     Eigen::MatrixXd nominal;
@@ -191,30 +231,30 @@ TEST_P(FamilySeam, ErrorTwistsMatchFiniteDifferencesOfTheFamilysOwnPose) {
 
 TEST_P(FamilySeam, ParameterNamesAreUniqueWithUnitsAndSymmetricAliases) {
   std::set<std::string> names;
-  for (const ki::ParameterSpec& s : family.parameter_specs(robot)) {
+  for (const ki::ParameterSpec& s : family.error_model().parameter_specs(robot)) {
     EXPECT_TRUE(names.insert(s.name).second) << "twice: " << s.name;
     EXPECT_TRUE(std::string(s.unit) == "mm" || std::string(s.unit) == "rad") << s.name;
   }
   if (robot.is_stewart()) {  // with the key leg_offset_sq: six more, in mm² (squared leg-line offsets)
     ki::Robot with_legs = robot;
     with_legs.models_leg_offsets = true;
-    const std::vector<ki::ParameterSpec>& specs = family.parameter_specs(with_legs);
-    ASSERT_EQ(specs.size(), family.parameter_specs(robot).size() + 6);
+    const std::vector<ki::ParameterSpec>& specs = family.error_model().parameter_specs(with_legs);
+    ASSERT_EQ(specs.size(), family.error_model().parameter_specs(robot).size() + 6);
     for (std::size_t k = specs.size() - 6; k < specs.size(); ++k) {
       EXPECT_TRUE(names.insert(specs[k].name).second) << "twice: " << specs[k].name;
       EXPECT_EQ(std::string(specs[k].unit), "mm2") << specs[k].name;
     }
   }
   for (const std::string& name : names) {
-    const std::string alias = family.alias_of(name);
+    const std::string alias = family.error_model().alias_of(name);
     if (alias.empty()) continue;
     EXPECT_TRUE(names.count(alias)) << name << " -> " << alias;
-    EXPECT_EQ(family.alias_of(alias), name);
+    EXPECT_EQ(family.error_model().alias_of(alias), name);
   }
 }
 
 TEST_P(FamilySeam, TheSimulatedMachineWithoutErrorsReachesTheCommandedPose) {
-  const std::unique_ptr<ki::ActualMachine> machine = family.actual_machine(robot, robot);
+  const std::unique_ptr<ki::ActualMachine> machine = family.kinematics().actual_machine(robot, robot);
   for (const Pose<double>& commanded : poses_around_home(robot, 6, 3)) {
     ki::PoseRow row;
     row.commanded = commanded.to_xyz_rpy();
@@ -260,7 +300,7 @@ TEST_P(FamilySeam, EffectColumnsAreTheDerivativeOfCoresCorrectionOnTheFamilysPos
   for (const Pose<double>& commanded : poses_around_home(robot, 3, 23)) {
     ki::EffectNode node;
     node.pose = commanded;
-    ASSERT_TRUE(family.forward_jacobian(open, commanded, node.q, node.joint_twist));
+    ASSERT_TRUE(family.kinematics().forward_jacobian(open, commanded, node.q, node.joint_twist));
     node.inputs.load = kincal::static_load_forward(node.joint_twist, frame.load_direction);
     for (int i = 0; i < 6; ++i) node.inputs.direction(i) = rng() % 2 ? 1.0 : -1.0;
     for (const std::shared_ptr<const ki::Effect>& effect : ki::effect_registry()) {
@@ -292,10 +332,10 @@ TEST_P(FamilySeam, EffectColumnsAreTheDerivativeOfCoresCorrectionOnTheFamilysPos
 TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
   const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
   const Pose<double> registration = Pose<double>::from_xyz_rpy(1500, -200, 300, 0.1, -0.2, 2.1);
-  const std::optional<ki::MeasurementModel> gauge = ki::family_of(hybrid).own_targets(hybrid);
+  const std::optional<ki::MeasurementModel> gauge = ki::family_of(hybrid).measurement().own_targets(hybrid);
   ASSERT_TRUE(gauge.has_value());
   EXPECT_EQ(gauge->rows(), 9);
-  EXPECT_FALSE(ki::family_of(ki::builtin_robot("stewart-seed001")).own_targets(hybrid).has_value());
+  EXPECT_FALSE(ki::family_of(ki::builtin_robot("stewart-seed001")).measurement().own_targets(hybrid).has_value());
   const std::vector<ki::MeasurementModel> models = {
       ki::MeasurementModel::targets({{30, 40, 10}}, registration),
       ki::MeasurementModel::targets({{30, 40, 10}, {-35, 20, 15}, {5, -45, 12}}, registration),

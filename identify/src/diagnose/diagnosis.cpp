@@ -457,7 +457,7 @@ void DiagnosisRun::check_inputs() {
   d.data_file = data.file;
   d.family = robot.family();
   for (int i = 0; i < 6; ++i) d.revolute[std::size_t(i)] = robot.revolute(i);
-  if (const std::string missing = family_of(robot).missing_measurement(robot, data); !missing.empty())
+  if (const std::string missing = family_of(robot).measurement().missing_measurement(robot, data); !missing.empty())
     throw InputError(data.file, 1, 0, missing);
   if (!data.has_layer) d.notes.push_back("no layer column: per-layer maps show all nodes as one layer");
   if (data.has_layer) {
@@ -539,7 +539,7 @@ void DiagnosisRun::set_noise() {
     scale_orientation_rows(base, orientation_factor);
   } else if (options.noise_urad) {
     d.notes.push_back(std::string("--noise-urad ignored: ") +
-                      (uses_target_model(robot, data) ? "the targets" : family_of(robot).own_measurement()) +
+                      (uses_target_model(robot, data) ? "the targets" : family_of(robot).measurement().own_measurement()) +
                       " measure positions only");
   }
 }

@@ -139,21 +139,22 @@ BaseModel descend_base(SteppedBaseFit& fit, const PoseTable& data, bool iterate)
 BaseModel fit_base_for_effects(const Robot& robot, const PoseTable& data,
                                const std::vector<std::optional<EffectNode>>& nodes,
                                std::unique_ptr<SteppedBaseFit>& stepped) {
-  const Family& family = family_of(robot);
-  if (uses_target_model(robot, data) || !family.steps_base_with_effects()) {
+  const FamilyPipeline* pipeline = family_of(robot).pipeline_reading(robot, data);
+  if (pipeline == nullptr || !pipeline->steps_base_with_effects()) {
     stepped.reset();
     return fit_base(robot, data, nodes, EstimatorKind::Ols, true, 0.0, Statistics::Skipped);
   }
   // What the family's fit_base (OLS, finished) constructs, kept.
-  stepped = family.stepped_base_fit(robot, data, nodes, EstimatorKind::Ols, 0.0);
+  stepped = pipeline->stepped_base_fit(robot, data, nodes, EstimatorKind::Ols, 0.0);
   return descend_base(*stepped, data, true);
 }
 
 BaseModel fit_base(const Robot& robot, const PoseTable& fit_data, const std::vector<std::optional<EffectNode>>& nodes,
                    std::optional<EstimatorKind> estimator, bool finish_least_squares, double ridge_k,
                    Statistics statistics) {
-  if (uses_target_model(robot, fit_data)) return target_base(robot, fit_data, nodes, statistics);
-  return family_of(robot).fit_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
+  const FamilyPipeline* pipeline = family_of(robot).pipeline_reading(robot, fit_data);
+  if (pipeline == nullptr) return target_base(robot, fit_data, nodes, statistics);
+  return pipeline->fit_base(robot, fit_data, nodes, estimator, finish_least_squares, ridge_k);
 }
 
 PoseTable effect_corrected_table(const Robot& robot, const PoseTable& data,

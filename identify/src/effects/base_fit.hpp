@@ -67,7 +67,7 @@ inline Vec6<double> joints_of(const PoseRow& row, const EffectNode& node) {
 // nearly collinear with the effects (the hybrid's compliance is 99.9 %
 // confounded with it), fitting the base to its minimum and then the effects
 // in turn creeps along those directions; one step of both moves along them
-// at once. Family::stepped_base_fit makes one; a family whose own fit
+// at once. FamilyPipeline::stepped_base_fit makes one; a family whose own fit
 // converges alone (the 6-UPS, seed 001's iterated LS) offers none, and its
 // effects alternate with fit_base.
 class SteppedBaseFit {
@@ -118,7 +118,7 @@ class SteppedBaseFit {
 // (a family's own pipeline computes its statistics anyway).
 enum class Statistics { Computed, Skipped };
 
-// The family's own pipeline (Family::fit_base), or the target fit for target
+// The family's own pipeline (FamilyPipeline::fit_base), or the target fit for target
 // data (either family).
 // `fit_data`: the table the base model is fitted on and compared with (the
 // measurements, possibly corrected for effects); `nodes`: effect_nodes of the

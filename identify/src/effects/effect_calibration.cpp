@@ -313,15 +313,19 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
     if (!missing.empty()) throw InputError(data.file, 0, 0, "effect '" + name + "' cannot be identified: " + missing);
     list.push_back(e);
   }
-  const Family& family = family_of(robot);
-  // A family that steps its base with the effects offers a ridge toward its
-  // centre; one that alternates fits its own base by OLS.
+  // A pipeline that steps its base with the effects offers a ridge toward
+  // its centre; one that alternates fits its own base by OLS, and so does
+  // the target fit (the data's reader decides, not the family).
+  const FamilyPipeline* pipeline = family_of(robot).pipeline_reading(robot, data);
+  const bool steps_base = pipeline != nullptr && pipeline->steps_base_with_effects();
   if (options.estimator && *options.estimator != EstimatorKind::Ols &&
-      !(*options.estimator == EstimatorKind::Ridge && family.steps_base_with_effects()))
+      !(*options.estimator == EstimatorKind::Ridge && steps_base))
     throw InputError("--estimator " + std::string(to_string(*options.estimator)) +
                      " with --effects: the base is fitted by " +
-                     (family.steps_base_with_effects() ? std::string("ols (default) or ridge")
-                                                       : "ols (" + std::string(family.base_fit()) + ")"));
+                     (steps_base ? std::string("ols (default) or ridge")
+                                 : "ols (" + std::string(pipeline ? pipeline->base_fit()
+                                                                  : "the target fit's Gauss-Newton") +
+                                       ")"));
   if (!(options.ridge_k >= 0)) throw InputError("--ridge-k must be a number >= 0 (0: by GCV)");
   const std::vector<std::optional<EffectNode>> nodes = effect_nodes(robot, data);
   EffectValues values;
@@ -353,17 +357,17 @@ CalibrationModel detail::calibrate_with_effects(const Robot& robot, const PoseTa
   detail::SteppedBaseFit* stepped = nullptr;
   const bool choose_k = options.estimator != EstimatorKind::Ols && !(options.ridge_k > 0);
   auto fit = [&]() {
-    if (!family.steps_base_with_effects() || uses_target_model(robot, data)) {  // target data: the target fit, either family
+    if (!steps_base) {  // target data: the target fit, whatever the family
       detail::BaseModel b = alternate(robot, data, nodes, list, held, options, values, rep, statistics);
-      rep.base = uses_target_model(robot, data) ? b.description : std::string(family.base_fit()) + " (OLS)";
+      rep.base = pipeline == nullptr ? b.description : std::string(pipeline->base_fit()) + " (OLS)";
       return b;
     }
     const bool first = stepped == nullptr;
     if (first && from != nullptr && !choose_k && !(options.ridge_k > 0)) {  // OLS: as `from` was made
       stepped = from;
     } else if (first) {
-      owned = family.stepped_base_fit(robot, data, nodes,
-                                      options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, options.ridge_k);
+      owned = pipeline->stepped_base_fit(robot, data, nodes,
+                                         options.ridge_k > 0 ? EstimatorKind::Ridge : EstimatorKind::Ols, options.ridge_k);
       stepped = owned.get();
     } else {
       stepped->set_penalty(options.ridge_k);

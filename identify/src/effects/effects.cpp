@@ -21,9 +21,9 @@ std::vector<std::string> numbered(const std::string& prefix, int count) {
   return out;
 }
 
-// Joints a screw drives (Family::screw_joints): the six legs of a 6-UPS, the
+// Joints a screw drives (FamilyKinematics::screw_joints): the six legs of a 6-UPS, the
 // three UPS limbs of the hybrid.
-int screw_joint_count(const Robot& robot) { return family_of(robot).screw_joints(); }
+int screw_joint_count(const Robot& robot) { return family_of(robot).kinematics().screw_joints(); }
 
 // The built-in joint-space effects: names and slots; their shapes are core's
 // effect_joint_error (JointSpaceEffect differentiates it).
@@ -243,7 +243,7 @@ EffectParameters<double> effect_frame(const Robot& robot) {
   EffectParameters<double> e;
   e.screw_lead = robot.screw_lead;
   e.screw_joints = std::uint8_t((1u << screw_joint_count(robot)) - 1u);
-  family_of(robot).set_effect_frame(robot, e);
+  family_of(robot).kinematics().set_effect_frame(robot, e);
   return e;
 }
 
@@ -259,7 +259,7 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
     n.pose = Pose<double>::from_xyz_rpy(row.commanded);
     n.id = row.id;
     Vec6<double> q_ik;
-    if (!family.forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
+    if (!family.kinematics().forward_jacobian(open, n.pose, q_ik, n.joint_twist)) continue;
     n.q = row.q ? Vec6<double>(row.q->head<6>()) : q_ik;
     n.inputs.load = static_load_forward(n.joint_twist, frame.load_direction);
     n.temperature = row.temp;

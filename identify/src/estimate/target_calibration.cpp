@@ -229,9 +229,8 @@ std::string describe(const WeakCombination& w) {
 }  // namespace
 
 bool uses_target_model(const Robot& robot, const PoseTable& data) {
-  if (!data.has_targets && !data.has_measured) return false;
-  if (data.in_instrument_frame) return true;
-  return !family_of(robot).reads_own_measurement(robot, data);
+  if (!data.has_targets && !data.has_measured) return false;  // nothing to fit: the callers' checks say so
+  return family_of(robot).pipeline_reading(robot, data) == nullptr;
 }
 
 bool reads_full_poses(const PoseTable& data) { return !data.has_targets && data.has_measured; }

@@ -1,7 +1,7 @@
 // The schema reader of robot descriptions (docs/formats.md "Robot
 // description"): every check names file, line and column. parse_robot
 // (robot.cpp) reads the common keys; each family reads its own
-// (Family::parse, families/<family>/).
+// (FamilyDescription::parse, families/<family>/).
 #pragma once
 
 #include <algorithm>

@@ -1,10 +1,11 @@
 // The registry of machine families (family.hpp). Adding a family is its
-// folder and one line in kFamilies (docs/architecture.md "Adding a machine
+// folder and one line in families() (docs/architecture.md "Adding a machine
 // family").
 #include "families/family.hpp"
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "effects/base_fit.hpp"
 #include "families/family_errors.hpp"
@@ -17,55 +18,54 @@ namespace kincal::identify {
 
 namespace {
 
-const StewartFamily kStewart;
-const HybridFamily kHybrid;
-const Rus6Family kRus6;
-const Family* const kFamilies[] = {&kStewart, &kHybrid, &kRus6};
+// The registry: one line per family.
+const std::vector<const Family*>& families() {
+  static const std::vector<const Family*> registered = {&stewart_family(), &hybrid_family(), &rus6_family()};
+  return registered;
+}
 
 }  // namespace
 
-// Without an own pipeline nothing routes a table to it (reads_own_measurement
-// is false): reaching here is a caller's bug, said as one.
-detail::BaseModel Family::fit_base(const Robot& robot, const PoseTable&, const std::vector<std::optional<EffectNode>>&,
-                                   std::optional<EstimatorKind>, bool, double) const {
-  throw std::logic_error(std::string("the ") + name() + " family has no own pipeline (robot '" + robot.name +
-                         "'): its measurements go to the target fit");
-}
-
-// A family offers no stepped base fit unless it says so (effects alternate
-// with its fit_base).
-std::unique_ptr<detail::SteppedBaseFit> Family::stepped_base_fit(const Robot&, const PoseTable&,
-                                                                 const std::vector<std::optional<EffectNode>>&,
-                                                                 EstimatorKind, double) const {
+// A pipeline offers no stepped base fit unless it says so (effects
+// alternate with its fit_base).
+std::unique_ptr<detail::SteppedBaseFit> FamilyPipeline::stepped_base_fit(const Robot&, const PoseTable&,
+                                                                         const std::vector<std::optional<EffectNode>>&,
+                                                                         EstimatorKind, double) const {
   return nullptr;
 }
 
+const FamilyPipeline* Family::pipeline_reading(const Robot& robot, const PoseTable& data) const {
+  if (own_pipeline_ == nullptr || data.in_instrument_frame) return nullptr;
+  if (!data.has_targets && !data.has_measured) return own_pipeline_;
+  return own_pipeline_->reads(robot, data) ? own_pipeline_ : nullptr;
+}
+
 const Family& family_of(const Robot& robot) {
-  for (const Family* f : kFamilies)
-    if (f->describes(robot)) return *f;
+  for (const Family* f : families())
+    if (f->description().describes(robot)) return *f;
   // Robot's variant holds one of the registered families' geometries; a
   // geometry added to the variant without its family here is a programming
   // error, said rather than answered by another family.
   throw std::logic_error("no registered family describes robot '" + robot.name +
-                         "' (identify/src/families/families.cpp: add its family to kFamilies)");
+                         "' (identify/src/families/families.cpp: add its family to families())");
 }
 
 const Family* family_named(const std::string& name) {
-  for (const Family* f : kFamilies)
+  for (const Family* f : families())
     if (name == f->name()) return f;
   return nullptr;
 }
 
 std::string family_names() {
   std::string out;
-  for (const Family* f : kFamilies) out += (out.empty() ? "" : ", ") + std::string(f->name());
+  for (const Family* f : families()) out += (out.empty() ? "" : ", ") + std::string(f->name());
   return out;
 }
 
 namespace detail {
 
 std::unique_ptr<FamilyErrors> family_errors(const Robot& robot) {
-  return family_of(robot).errors(without_limits(robot));
+  return family_of(robot).error_model().errors(without_limits(robot));
 }
 
 }  // namespace detail

@@ -1,5 +1,5 @@
 // A machine family's error parameters as the family-free fits and plans see
-// them (private to identify/; docs/architecture.md; Family::errors gives
+// them (private to identify/; docs/architecture.md; FamilyErrorModel::errors gives
 // them):
 //   (a) the machine's pose for its error parameters and a node's commands,
 //   (b) the pose error twist per error parameter at that pose,

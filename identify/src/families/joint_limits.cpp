@@ -60,7 +60,7 @@ Robot without_limits(Robot robot) {
 std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTable& data) {
   const Robot open = without_limits(robot);
   const Family& family = family_of(robot);
-  const std::vector<PassiveLimit> passive = family.passive_limits(robot);
+  const std::vector<PassiveLimit> passive = family.kinematics().passive_limits(robot);
   std::vector<std::string> out;
   for (const PoseRow& r : data.rows) {
     Vec6<double> q;
@@ -80,7 +80,7 @@ std::vector<std::string> joint_limit_warnings(const Robot& robot, const PoseTabl
     if (passive.empty()) continue;
     std::vector<double> value(passive.size());
     Vec6<double> q_ik;
-    if (family.inverse(open, Pose<double>::from_xyz_rpy(r.commanded), q_ik, nullptr, value.data()) != Status::Ok)
+    if (family.kinematics().inverse(open, Pose<double>::from_xyz_rpy(r.commanded), q_ik, nullptr, value.data()) != Status::Ok)
       continue;
     for (std::size_t k = 0; k < passive.size(); ++k) {
       const std::string msg = outside(passive[k].name, value[k], passive[k].lo, passive[k].hi, passive[k].unit);

@@ -28,26 +28,26 @@ using nlohmann::json;
 // ---------------------------------------------------------------- the family's answers
 
 const char* Robot::family() const { return family_of(*this).name(); }
-Pose<double> Robot::home_pose() const { return family_of(*this).home_pose(*this); }
+Pose<double> Robot::home_pose() const { return family_of(*this).kinematics().home_pose(*this); }
 
 Vec6<double> Robot::correction_bound() const {
   if (max_correction) return *max_correction;
-  const TableBounds<double> b = family_of(*this).default_bounds(*this);
+  const TableBounds<double> b = family_of(*this).table().default_bounds(*this);
   Vec6<double> v;
   for (int i = 0; i < 6; ++i) v(i) = b.max_correction[i];
   return v;
 }
 
-void Robot::joint_limits(Vec6<double>& lo, Vec6<double>& hi) const { family_of(*this).joint_limits(*this, lo, hi); }
+void Robot::joint_limits(Vec6<double>& lo, Vec6<double>& hi) const { family_of(*this).kinematics().joint_limits(*this, lo, hi); }
 
 Status Robot::inverse(const Pose<double>& pose, Vec6<double>& q) const {
-  return family_of(*this).inverse(*this, pose, q);
+  return family_of(*this).kinematics().inverse(*this, pose, q);
 }
 
-bool Robot::revolute(int joint) const { return family_of(*this).revolute(joint); }
-const char* Robot::target_body() const { return family_of(*this).target_body(); }
-const char* Robot::error_model() const { return family_of(*this).error_model(); }
-Eigen::Index Robot::outlier_min_nodes() const { return family_of(*this).outlier_min_nodes(); }
+bool Robot::revolute(int joint) const { return family_of(*this).kinematics().revolute(joint); }
+const char* Robot::target_body() const { return family_of(*this).kinematics().target_body(); }
+const char* Robot::error_model() const { return family_of(*this).error_model().name(); }
+Eigen::Index Robot::outlier_min_nodes() const { return family_of(*this).error_model().outlier_min_nodes(); }
 
 // ---------------------------------------------------------------- built-ins
 
@@ -137,7 +137,7 @@ Robot parse_robot(const std::string& text, const std::string& file) {
   const std::string family = r.string(doc["family"], "/family");
   const Family* f = family_named(family);
   if (f == nullptr) r.fail("/family", "unknown family '" + family + "' (known: " + family_names() + ")");
-  Robot robot = f->parse(doc, r);
+  Robot robot = f->description().parse(doc, r);
   robot.name = name;
   read_formula_effects_into(robot, doc, text, file);
   // The controller's hybrid statics take a weight at the tool point only
@@ -193,7 +193,7 @@ std::string robot_to_json(const Robot& robot) {
   j["family"] = robot.family();
   j["name"] = robot.name;
   j["units"] = {{"length", "mm"}, {"angle", "rad"}};
-  family_of(robot).write(robot, j);
+  family_of(robot).description().write(robot, j);
   j["screw_lead"] = robot.screw_lead;
   if (robot.max_correction) {
     const Vec6<double>& m = *robot.max_correction;
@@ -228,7 +228,7 @@ std::string robot_summary(const Robot& robot) {
   os << "name:    " << robot.name << "\n"
      << "family:  " << robot.family() << " (" << Robot::joint_count() << " actuated joints)\n";
   const Vec6<double> home = robot.home_pose().to_xyz_rpy();
-  family_of(robot).summarize(robot, os);
+  family_of(robot).description().summarize(robot, os);
   os << "home pose (x y z rx ry rz): " << home.transpose() << "\n";
   Vec6<double> q;
   const Status s = robot.inverse(robot.home_pose(), q);

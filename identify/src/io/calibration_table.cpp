@@ -37,7 +37,7 @@ CompensationStatus finish(CalibrationTable<Machine>& t, const CalibrationModel& 
   else if (why != nullptr && st != CompensationStatus::Ok) {
     // Where a model can cause it, the family names the value (the encoder
     // offsets, one correction at every point).
-    std::string value = family_of(model.nominal).machine_value_violation(AnyCalibrationTable(t));
+    std::string value = family_of(model.nominal).table().machine_value_violation(AnyCalibrationTable(t));
     if (value.empty()) value = "a correction above its bound or a value out of range";
     *why = std::string("the calibration table fails its check (") + to_string(st) + "): " + value;
   }
@@ -47,7 +47,7 @@ CompensationStatus finish(CalibrationTable<Machine>& t, const CalibrationModel& 
 }  // namespace
 
 MachineLimits<double> machine_limits(const Robot& robot, const CalibrationTableOptions& options) {
-  const TableBounds<double> b = family_of(robot).default_bounds(robot);
+  const TableBounds<double> b = family_of(robot).table().default_bounds(robot);
   MachineLimits<double> l = limits_from_bounds(b);
   const Vec6<double> bound = options.max_correction ? *options.max_correction : robot.correction_bound();
   for (int i = 0; i < 6; ++i) l.max_correction[i] = bound(i);
@@ -67,7 +67,7 @@ std::string limit_violation(const Robot& robot, const AnyCalibrationTable& any, 
         if (!limits_detail::sane(l))
           return "the machine limits are not sane (a cap negative or not finite, a joint range empty, a correction "
                  "bound not positive)";
-        const char* range_key = family.joint_range_key();
+        const char* range_key = family.table().joint_range_key();
         for (int i = 0; i < 6; ++i) {
           const std::string j = "[" + std::to_string(i) + "] ";
           if (!(t.bounds.min_joint[i] >= l.min_joint[i]))
@@ -97,7 +97,7 @@ std::string limit_violation(const Robot& robot, const AnyCalibrationTable& any, 
           return "effects.thermal = " + number(e.thermal) + " above max_thermal " + number(l.max_thermal) +
                  key_note("max_thermal");
         // The machine's own numbers: the family says which and against what.
-        return family.machine_limit_violation(any, l);
+        return family.table().machine_limit_violation(any, l);
       },
       any);
   return why;
@@ -105,11 +105,11 @@ std::string limit_violation(const Robot& robot, const AnyCalibrationTable& any, 
 
 namespace {
 
-// The family's table (machine and bounds: Family::machine_table), finished:
+// The family's table (machine and bounds: FamilyTable::machine_table), finished:
 // effects and bounds filled, sealed and checked.
 AnyCalibrationTable build_table(const CalibrationModel& model, const CalibrationTableOptions& options,
                                 CompensationStatus& status, std::string* why) {
-  AnyCalibrationTable t = family_of(model.nominal).machine_table(model);
+  AnyCalibrationTable t = family_of(model.nominal).table().machine_table(model);
   std::visit([&](auto& table) { status = finish(table, model, options, why); }, t);
   return t;
 }

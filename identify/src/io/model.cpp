@@ -167,7 +167,7 @@ static CalibrationModel parse_model_json(const json& j, const ModelReader& r, co
       r.fail(at + "/name", "unknown parameter \"" + mp.name + "\" for a " + m.nominal.family() + " robot");
     if (const auto it = seen.find(mp.name); it != seen.end())
       r.fail(at, "parameter \"" + mp.name + "\" is given twice (also entry " + std::to_string(it->second + 1) + ")");
-    if (const std::string alias = family_of(m.nominal).alias_of(mp.name); !alias.empty())
+    if (const std::string alias = family_of(m.nominal).error_model().alias_of(mp.name); !alias.empty())
       if (const auto it = seen.find(alias); it != seen.end())
         r.fail(at, "parameter \"" + mp.name + "\" is the same encoder offset as \"" + it->first + "\" (entry " +
                        std::to_string(it->second + 1) + "); give it once");

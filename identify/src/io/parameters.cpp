@@ -28,7 +28,7 @@ const ParameterSpec* find_spec(const Robot& robot, const std::string& name) {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) { return family_of(robot).parameter_specs(robot); }
+const std::vector<ParameterSpec>& parameter_specs(const Robot& robot) { return family_of(robot).error_model().parameter_specs(robot); }
 
 std::vector<std::string> parameter_names(const Robot& robot) {
   std::vector<std::string> out;

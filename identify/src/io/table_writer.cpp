@@ -26,7 +26,7 @@ namespace {
 
 // Named groups of the canonical value list, in the order for_each_value
 // visits them (core/calibration_table.hpp): the machine's from its family
-// (Family::machine_groups), then the effects and bounds every table has.
+// (FamilyTable::machine_groups), then the effects and bounds every table has.
 // Only labels for the reader: their count is checked against
 // table_value_count below, so a change of the layout in core fails loudly
 // here instead of mislabelling.
@@ -43,7 +43,7 @@ void add_effects_and_bounds(Groups& g) {
 }
 
 template <class Machine> Groups groups(const Robot& robot) {
-  Groups g = family_of(robot).machine_groups(robot);
+  Groups g = family_of(robot).table().machine_groups(robot);
   add_effects_and_bounds(g);
   int total = 0;
   for (const TableGroup& e : g) total += e.count;

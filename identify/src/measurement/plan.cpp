@@ -76,7 +76,7 @@ class Workspace {
       range_(i) = bounded_[i] ? range : 0.0;
     }
     // The passive joints the description bounds (the hybrid's UP extension).
-    for (PassiveLimit p : family_.passive_limits(robot)) {
+    for (PassiveLimit p : family_.kinematics().passive_limits(robot)) {
       if (!(p.hi - p.lo < kUnbounded)) continue;
       const double range = p.hi - p.lo;
       p.lo += margin_ * range;
@@ -107,7 +107,7 @@ class Workspace {
     // The IK without its Jacobian first: most sampled poses fail the limits,
     // and that needs only the joints.
     std::array<double, 4> passive{};  // the family's passive joints (passive_limits)
-    Status s = family_.inverse(open_, pose, q, nullptr, passive.data());
+    Status s = family_.kinematics().inverse(open_, pose, q, nullptr, passive.data());
     if (s != Status::Ok) {
       if (why) *why = std::string("IK: ") + to_string(s);
       return false;
@@ -127,8 +127,8 @@ class Workspace {
     }
     Mat6<double> J;
     Vec6<double> q_again;
-    const double L = family_.characteristic_length(open_);
-    s = family_.inverse(open_, pose, q_again, &J);
+    const double L = family_.kinematics().characteristic_length(open_);
+    s = family_.kinematics().inverse(open_, pose, q_again, &J);
     if (s != Status::Ok) {
       if (why) *why = std::string("IK: ") + to_string(s);
       return false;
@@ -170,7 +170,7 @@ class DesignRows {
     PlanMeasure m = o.measure;
     const Family& family = family_of(robot);
     // The family's own instrument: the full pose, or its targets (the hybrid's gauge).
-    const std::optional<MeasurementModel> own = family.own_targets(robot);
+    const std::optional<MeasurementModel> own = family.measurement().own_targets(robot);
     if (m == PlanMeasure::Default) m = own ? PlanMeasure::Targets : PlanMeasure::Pose;
     sigma_mm_ = o.noise_mm;
     sigma_rad_ = o.noise_rad > 0 ? o.noise_rad : o.noise_mm / kOrientationLeverMm;
@@ -178,7 +178,7 @@ class DesignRows {
       if (own)
         notes.push_back(std::string("this plan's numbers are for a full-pose instrument: kincal identify reads the "
                                     "poses (mx..mrz) of a table without target columns, instead of ") +
-                        family.own_measurement());
+                        family.measurement().own_measurement());
     } else if (!robot.targets.empty()) {
       model_ = MeasurementModel::targets(robot.targets);
       notes.push_back("this plan's numbers are for targets measured in the robot's base frame (a tracker aligned to "
@@ -537,7 +537,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   const Vec6<double> home = robot.home_pose().to_xyz_rpy();
   Vec6<double> reach_lo, reach_hi;
   {
-    const double size = family_of(robot).reach(robot);
+    const double size = family_of(robot).kinematics().reach(robot);
     for (int d = 0; d < 6; ++d)
       for (int sign : {-1, 1}) {
         double good = 0, bad = d < 3 ? 2 * size : 1.5;
@@ -858,7 +858,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
   // one layer of pure translations as seed 000's), shrunk until every node
   // is usable.
   if (o.compare) {
-    const HandGrid habit = family_of(robot).hand_grid();
+    const HandGrid habit = family_of(robot).measurement().hand_grid();
     const int layers = habit.layers;
     const std::size_t per_layer = (o.count + std::size_t(layers) - 1) / std::size_t(layers);
     const int nx = int(std::ceil(std::sqrt(double(per_layer))));

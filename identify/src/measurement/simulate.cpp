@@ -75,7 +75,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   if (!options.targets.empty())
     tracker = MeasurementModel::targets(options.targets, options.instrument_frame.value_or(Pose<double>{}));
   const std::optional<MeasurementModel> own_targets =
-      options.pose_only ? std::nullopt : family.own_targets(actual);
+      options.pose_only ? std::nullopt : family.measurement().own_targets(actual);
   if (options.targets.size() > 3) throw InputError("--targets: at most three targets (t1..t3)");
   if (options.instrument_frame && !tracker)
     throw InputError("--instrument-frame applies to target measurements (--targets)");
@@ -87,7 +87,7 @@ PoseTable simulate(const Robot& nominal, const Robot& actual, const PoseTable& p
   out.has_status = false;
   out.ignored_columns.clear();
   report = SimulateReport{};
-  const std::unique_ptr<ActualMachine> machine = family.actual_machine(nominal, actual);
+  const std::unique_ptr<ActualMachine> machine = family.kinematics().actual_machine(nominal, actual);
   const bool with_effects = !options.effects.empty();
   if (with_effects && options.effects.needs_temperature() && !poses.has_temp)
     throw InputError(poses.file, 1, 0, "the thermal effect needs a temp column (structure temperature, C)");

@@ -71,12 +71,6 @@ std::string describe_estimate(const Estimate& e, const EstimatorOptions& o) {
   return s.str();
 }
 
-// A family without a pipeline of its own reads tracker targets only.
-Identification Family::identify_own(const Robot& robot, const PoseTable&, const IdentifyOptions&,
-                                    std::ostream&) const {
-  throw InputError(std::string("identify: the ") + robot.family() +
-                   " family's own measurement has no pipeline here yet; measure tracker targets (t1x,t1y,t1z)");
-}
 
 namespace {
 
@@ -189,7 +183,7 @@ Identification identify_targets(const Robot& robot, const PoseTable& data, const
 }  // namespace
 
 void check_identify_options(const Robot& robot, const IdentifyOptions& options) {
-  family_of(robot).check_identify_options(options);
+  if (const FamilyPipeline* pipeline = family_of(robot).own_pipeline()) pipeline->check_identify_options(options);
 }
 
 Identification identify(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
@@ -197,7 +191,15 @@ Identification identify(const Robot& robot, const PoseTable& data, const Identif
   check_identify_options(robot, options);
   // Targets are used when they are all the table has, or when asked for.
   if (uses_target_model(robot, data)) return identify_targets(robot, data, options, narrative);
-  return family_of(robot).identify_own(robot, data, options, narrative);
+  // The rest goes to the family's own pipeline, which says what its table
+  // lacks; a family without one has nothing to read in it.
+  const FamilyPipeline* pipeline = family_of(robot).pipeline_reading(robot, data);
+  if (pipeline == nullptr)
+    throw InputError(data.file, 0, 0,
+                     std::string("identify: the table has neither measured poses (mx..mrz) nor tracker targets "
+                                 "(t1x,t1y,t1z); a ") +
+                         robot.family() + " robot is identified from one of them");
+  return pipeline->identify_own(robot, data, options, narrative);
 }
 
 }  // namespace kincal::identify

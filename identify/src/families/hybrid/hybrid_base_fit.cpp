@@ -1,4 +1,4 @@
-// The hybrid's base fit (hybrid_base_fit.hpp) and HybridFamily::fit_base.
+// The hybrid's base fit (hybrid_base_fit.hpp) and HybridFamilyPipeline::fit_base.
 #include "families/hybrid/hybrid_base_fit.hpp"
 
 #include <algorithm>
@@ -289,14 +289,14 @@ void HybridBaseFit::finish(BaseModel& base, const std::string& data_file, int st
 
 }  // namespace detail
 
-std::unique_ptr<detail::SteppedBaseFit> HybridFamily::stepped_base_fit(
+std::unique_ptr<detail::SteppedBaseFit> HybridFamilyPipeline::stepped_base_fit(
     const Robot& robot, const PoseTable& start, const std::vector<std::optional<EffectNode>>& nodes,
     EstimatorKind estimator, double ridge_k) const {
   return std::make_unique<detail::HybridBaseFit>(robot, start, nodes, estimator, true, ridge_k);
 }
 
-detail::BaseModel HybridFamily::fit_base(const Robot& robot, const PoseTable& data,
-                                         const std::vector<std::optional<EffectNode>>& en,
+detail::BaseModel HybridFamilyPipeline::fit_base(const Robot& robot, const PoseTable& data,
+                                                 const std::vector<std::optional<EffectNode>>& en,
                                          std::optional<EstimatorKind> estimator, bool finish, double ridge_k) const {
   detail::HybridBaseFit fit(robot, data, en, estimator, finish, ridge_k);
   return detail::descend_base(fit, data, finish || estimator == EstimatorKind::Ridge);

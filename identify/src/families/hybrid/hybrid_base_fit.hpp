@@ -1,6 +1,6 @@
 // The hybrid's base fit as a state (seed 000's pipeline made a linear
 // problem at its solution; effects/base_fit.hpp's BaseModel). Private to
-// identify/: HybridFamily::fit_base runs it to the least-squares minimum;
+// identify/: HybridFamilyPipeline::fit_base runs it to the least-squares minimum;
 // the joint fit of base and effects (effect_calibration.cpp) steps it
 // together with the effect parameters.
 #pragma once

@@ -177,7 +177,7 @@ class HybridErrors final : public FamilyErrors {
 }  // namespace
 }  // namespace detail
 
-std::unique_ptr<detail::FamilyErrors> HybridFamily::errors(const Robot& open) const {
+std::unique_ptr<detail::FamilyErrors> HybridFamilyErrorModel::errors(const Robot& open) const {
   return std::make_unique<detail::HybridErrors>(open);
 }
 

@@ -61,7 +61,7 @@ HybridDesign hybrid_design_of(const HybridGeometry<double>& g) {
 
 // ---------------------------------------------------------------- description
 
-Robot HybridFamily::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
+Robot HybridFamilyDescription::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "platform_to_wrist",
             "wrist_link", "tool_length", "beta", "reference_extension", "joint_limits", "extension_limits"},
@@ -102,7 +102,7 @@ Robot HybridFamily::parse(const nlohmann::json& doc, const detail::DescriptionRe
   return robot;
 }
 
-void HybridFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
+void HybridFamilyDescription::write(const Robot& robot, nlohmann::ordered_json& j) const {
   const HybridDesign d = hybrid_design_of(robot.hybrid());
   j["base_joints"] = detail::points_json<3>(d.base_joints);
   j["platform_joints"] = detail::points_json<3>(d.platform_joints);
@@ -117,7 +117,7 @@ void HybridFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
   j["gauge_radius"] = robot.gauge_radius;
 }
 
-void HybridFamily::summarize(const Robot& robot, std::ostream& os) const {
+void HybridFamilyDescription::summarize(const Robot& robot, std::ostream& os) const {
   const HybridDesign d = hybrid_design_of(robot.hybrid());
   os << "UPS base joints A1i (mm):\n";
   for (int i = 0; i < 3; ++i) os << "  " << i + 1 << ": " << d.base_joints.col(i).transpose() << "\n";
@@ -130,35 +130,35 @@ void HybridFamily::summarize(const Robot& robot, std::ostream& os) const {
 
 // ---------------------------------------------------------------- kinematics
 
-Pose<double> HybridFamily::home_pose(const Robot& robot) const {
+Pose<double> HybridFamilyKinematics::home_pose(const Robot& robot) const {
   const HybridGeometry<double>& g = robot.hybrid();
   const Vec3<double> ref_angles(0.0, hybrid_design_of(g).beta, 0.0);
   return hybrid_tool_pose(g, hybrid_frames(g, g.home, ref_angles));
 }
 
-TableBounds<double> HybridFamily::default_bounds(const Robot& robot) const {
+TableBounds<double> HybridFamilyTable::default_bounds(const Robot& robot) const {
   return kincal::default_bounds(robot.hybrid());
 }
 
-void HybridFamily::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
+void HybridFamilyKinematics::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
   lo = robot.hybrid().min_joint;
   hi = robot.hybrid().max_joint;
 }
 
-std::vector<PassiveLimit> HybridFamily::passive_limits(const Robot& robot) const {
+std::vector<PassiveLimit> HybridFamilyKinematics::passive_limits(const Robot& robot) const {
   return {{"UP extension c", "mm", robot.hybrid().min_extension, robot.hybrid().max_extension}};
 }
 
-Status HybridFamily::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
-                             double* passive) const {
+Status HybridFamilyKinematics::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
+                                       double* passive) const {
   HybridPassive<double> s = robot.hybrid().home;
   const Status status = hybrid_ik(robot.hybrid(), pose, q, J, &s);
   if (passive != nullptr) passive[0] = s.extension;
   return status;
 }
 
-bool HybridFamily::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
-                                    Mat6<double>& J) const {
+bool HybridFamilyKinematics::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
+                                              Mat6<double>& J) const {
   const HybridGeometry<double>& g = robot.hybrid();
   HybridPassive<double> passive;
   if (hybrid_ik(g, pose, q, nullptr, &passive) != Status::Ok) return false;
@@ -166,11 +166,11 @@ bool HybridFamily::forward_jacobian(const Robot& robot, const Pose<double>& pose
   return hybrid_forward_jacobian(g, hybrid_frames(g, passive, wrist), J);
 }
 
-double HybridFamily::reach(const Robot& robot) const {
+double HybridFamilyKinematics::reach(const Robot& robot) const {
   return robot.hybrid().base_joints.colwise().norm().maxCoeff() + robot.hybrid().tool_length;
 }
 
-void HybridFamily::set_effect_frame(const Robot& robot, EffectParameters<double>& e) const {
+void HybridFamilyKinematics::set_effect_frame(const Robot& robot, EffectParameters<double>& e) const {
   // Poses are in the workpiece frame {R}: p_R = wR0·(p_0 − o) (hybrid.hpp).
   const HybridGeometry<double>& g = robot.hybrid();
   e.load_direction = g.workpiece_rotation * Vec3<double>(0, 0, -1);
@@ -262,14 +262,14 @@ class HybridActual final : public ActualMachine {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& HybridFamily::parameter_specs(const Robot&) const {
+const std::vector<ParameterSpec>& HybridFamilyErrorModel::parameter_specs(const Robot&) const {
   static const std::vector<ParameterSpec> table = hybrid_table();
   return table;
 }
 
 // The hybrid's encoder offsets have two names each: PARAMS.csv's dq1..dq3,
 // dtheta4..dtheta6 and seed 000's source errors dxi_3_1 … dxi_6_4.
-std::string HybridFamily::alias_of(const std::string& name) const {
+std::string HybridFamilyErrorModel::alias_of(const std::string& name) const {
   static const char* pairs[][2] = {{"dq1", "dxi_3_1"},     {"dq2", "dxi_3_2"},     {"dq3", "dxi_3_3"},
                                    {"dtheta4", "dxi_4_4"}, {"dtheta5", "dxi_5_4"}, {"dtheta6", "dxi_6_4"}};
   for (const auto& p : pairs) {
@@ -279,7 +279,7 @@ std::string HybridFamily::alias_of(const std::string& name) const {
   return {};
 }
 
-AnyCalibrationTable HybridFamily::machine_table(const CalibrationModel& model) const {
+AnyCalibrationTable HybridFamilyTable::machine_table(const CalibrationModel& model) const {
   const HybridCompensation c = hybrid_compensation_from_model(model);
   HybridCalibrationTable<double> t{};
   t.machine.nominal = to_table(c.nominal);
@@ -291,7 +291,7 @@ AnyCalibrationTable HybridFamily::machine_table(const CalibrationModel& model) c
   return t;
 }
 
-std::vector<TableGroup> HybridFamily::machine_groups(const Robot& robot) const {
+std::vector<TableGroup> HybridFamilyTable::machine_groups(const Robot& robot) const {
   std::vector<TableGroup> g;
   for (const auto& [name, n] :
        {std::pair{"base_joints", 9}, {"platform_joints", 9}, {"platform_to_wrist", 1}, {"wrist_link", 1},
@@ -312,8 +312,8 @@ std::vector<TableGroup> HybridFamily::machine_groups(const Robot& robot) const {
 // The source errors, each against its own cap: the angles against
 // max_angle_error, the lengths against max_geometry_error (as core's
 // machine_inside).
-std::string HybridFamily::machine_limit_violation(const AnyCalibrationTable& table,
-                                                  const MachineLimits<double>& l) const {
+std::string HybridFamilyTable::machine_limit_violation(const AnyCalibrationTable& table,
+                                                       const MachineLimits<double>& l) const {
   const double(&values)[kHybridSourceErrorCount] = std::get<HybridCalibrationTable<double>>(table).machine.source_errors;
   for (int k = 0; k < kHybridSourceErrorCount; ++k) {
     const bool angle = HybridErrorLayout::angular(k);
@@ -327,7 +327,7 @@ std::string HybridFamily::machine_limit_violation(const AnyCalibrationTable& tab
 }
 
 // The encoder offsets: one correction at every point.
-std::string HybridFamily::machine_value_violation(const AnyCalibrationTable& table) const {
+std::string HybridFamilyTable::machine_value_violation(const AnyCalibrationTable& table) const {
   const HybridCalibrationTable<double>& t = std::get<HybridCalibrationTable<double>>(table);
   for (int i = 0; i < 6; ++i)
     if (!(std::abs(t.machine.encoder_offsets[i]) <= t.bounds.max_correction[i]))
@@ -337,13 +337,24 @@ std::string HybridFamily::machine_value_violation(const AnyCalibrationTable& tab
   return {};
 }
 
-std::string HybridFamily::missing_measurement(const Robot& robot, const PoseTable& data) const {
+std::string HybridFamilyMeasurement::missing_measurement(const Robot& robot, const PoseTable& data) const {
   if (data.target_columns() == 3 || uses_target_model(robot, data)) return {};
   return "needs the gauge target columns t1x..t3z, or measured poses mx..mrz, to diagnose a hybrid";
 }
 
-std::unique_ptr<ActualMachine> HybridFamily::actual_machine(const Robot& nominal, const Robot& actual) const {
+std::unique_ptr<ActualMachine> HybridFamilyKinematics::actual_machine(const Robot& nominal, const Robot& actual) const {
   return std::make_unique<HybridActual>(nominal, actual);
+}
+
+const Family& hybrid_family() {
+  static const HybridFamilyDescription description;
+  static const HybridFamilyKinematics kinematics;
+  static const HybridFamilyErrorModel error_model;
+  static const HybridFamilyMeasurement measurement;
+  static const HybridFamilyTable table;
+  static const HybridFamilyPipeline pipeline;
+  static const Family family(description, kinematics, error_model, measurement, table, &pipeline);
+  return family;
 }
 
 }  // namespace kincal::identify

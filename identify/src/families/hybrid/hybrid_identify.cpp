@@ -15,8 +15,8 @@
 
 namespace kincal::identify {
 
-Identification HybridFamily::identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
-                                          std::ostream& narrative) const {
+Identification HybridFamilyPipeline::identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
+                                                  std::ostream& narrative) const {
   Identification out;
   std::string estimator = options.estimator.empty() ? "liu" : options.estimator;
   EstimatorOptions eo = estimator_options(options, estimator);

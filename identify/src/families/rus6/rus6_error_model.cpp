@@ -68,8 +68,8 @@ const std::vector<ParameterSpec>& rus6_specs() {
 
 }  // namespace
 
-const std::vector<ParameterSpec>& Rus6Family::parameter_specs(const Robot&) const { return rus6_specs(); }
-
+const std::vector<ParameterSpec>& Rus6FamilyErrorModel::parameter_specs(const Robot&) const { return rus6_specs(); }
+                                                                        
 Rus6Geometry<double> rus6_with_errors(const Rus6Geometry<double>& nominal, const Eigen::VectorXd& x) {
   Robot r;
   r.geometry = nominal;
@@ -198,7 +198,7 @@ class Rus6Errors final : public FamilyErrors {
 }  // namespace
 }  // namespace detail
 
-std::unique_ptr<detail::FamilyErrors> Rus6Family::errors(const Robot& open) const {
+std::unique_ptr<detail::FamilyErrors> Rus6FamilyErrorModel::errors(const Robot& open) const {
   return std::make_unique<detail::Rus6Errors>(open);
 }
 

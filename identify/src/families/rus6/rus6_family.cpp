@@ -33,7 +33,7 @@ nlohmann::json per_leg_json(const Vec6<double>& v) {
 
 }  // namespace
 
-Robot Rus6Family::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
+Robot Rus6FamilyDescription::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "motor_axes", "crank_zero", "crank_length", "rod_length",
             "platform_joints", "joint_limits", "home"},
@@ -97,7 +97,7 @@ Robot Rus6Family::parse(const nlohmann::json& doc, const detail::DescriptionRead
   return robot;
 }
 
-void Rus6Family::write(const Robot& robot, nlohmann::ordered_json& j) const {
+void Rus6FamilyDescription::write(const Robot& robot, nlohmann::ordered_json& j) const {
   const Rus6Geometry<double>& g = robot.rus6();
   nlohmann::ordered_json motors = nlohmann::ordered_json::array();
   for (int i = 0; i < 6; ++i)
@@ -114,7 +114,7 @@ void Rus6Family::write(const Robot& robot, nlohmann::ordered_json& j) const {
   j["home"] = {{"x", h(0)}, {"y", h(1)}, {"z", h(2)}, {"rx", h(3)}, {"ry", h(4)}, {"rz", h(5)}};
 }
 
-void Rus6Family::summarize(const Robot& robot, std::ostream& os) const {
+void Rus6FamilyDescription::summarize(const Robot& robot, std::ostream& os) const {
   const Rus6Geometry<double>& g = robot.rus6();
   os << "motors: shaft point s_i (mm), axis a_i, crank zero z_i:\n";
   for (int i = 0; i < 6; ++i)
@@ -128,35 +128,35 @@ void Rus6Family::summarize(const Robot& robot, std::ostream& os) const {
 
 // ---------------------------------------------------------------- kinematics
 
-TableBounds<double> Rus6Family::default_bounds(const Robot& robot) const {
+TableBounds<double> Rus6FamilyTable::default_bounds(const Robot& robot) const {
   return kincal::default_bounds(robot.rus6());
 }
 
-void Rus6Family::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
+void Rus6FamilyKinematics::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
   lo = robot.rus6().min_joint;
   hi = robot.rus6().max_joint;
 }
 
-Status Rus6Family::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
-                           double*) const {
+Status Rus6FamilyKinematics::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
+                                     double*) const {
   return rus6_ik(robot.rus6(), pose, q, J);
 }
 
-bool Rus6Family::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
-                                  Mat6<double>& J) const {
+bool Rus6FamilyKinematics::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
+                                            Mat6<double>& J) const {
   Rus6Legs<double> legs;
   if (rus6_ik(robot.rus6(), pose, q, nullptr, &legs) != Status::Ok) return false;
   return rus6_forward_jacobian(robot.rus6(), legs, J) == Status::Ok && all_finite(J);
 }
 
-double Rus6Family::reach(const Robot& robot) const {
+double Rus6FamilyKinematics::reach(const Robot& robot) const {
   const Rus6Geometry<double>& g = robot.rus6();
   return g.shaft_points.colwise().norm().maxCoeff() + g.crank_length.maxCoeff();
 }
 
 // ---------------------------------------------------------------- the table
 
-AnyCalibrationTable Rus6Family::machine_table(const CalibrationModel& model) const {
+AnyCalibrationTable Rus6FamilyTable::machine_table(const CalibrationModel& model) const {
   const Rus6Geometry<double>& nominal = model.nominal.rus6();
   Rus6CalibrationTable<double> t{};
   t.machine.nominal = to_table(nominal);
@@ -165,7 +165,7 @@ AnyCalibrationTable Rus6Family::machine_table(const CalibrationModel& model) con
   return t;
 }
 
-std::vector<TableGroup> Rus6Family::machine_groups(const Robot&) const {
+std::vector<TableGroup> Rus6FamilyTable::machine_groups(const Robot&) const {
   std::vector<TableGroup> g;
   for (const char* part : {"machine.nominal.", "machine.calibrated."})
     for (const auto& [name, n] :
@@ -176,7 +176,7 @@ std::vector<TableGroup> Rus6Family::machine_groups(const Robot&) const {
   return g;
 }
 
-std::string Rus6Family::machine_limit_violation(const AnyCalibrationTable& table, const MachineLimits<double>& l) const {
+std::string Rus6FamilyTable::machine_limit_violation(const AnyCalibrationTable& table, const MachineLimits<double>& l) const {
   using detail::first_above;
   const Rus6Machine<double>& m = std::get<Rus6CalibrationTable<double>>(table).machine;
   const auto& c = m.calibrated;
@@ -202,7 +202,7 @@ std::string Rus6Family::machine_limit_violation(const AnyCalibrationTable& table
 }
 
 // The encoder offsets (the cranks' zeros): one correction at every point.
-std::string Rus6Family::machine_value_violation(const AnyCalibrationTable& table) const {
+std::string Rus6FamilyTable::machine_value_violation(const AnyCalibrationTable& table) const {
   const Rus6CalibrationTable<double>& t = std::get<Rus6CalibrationTable<double>>(table);
   for (int i = 0; i < 6; ++i)
     if (!(std::abs(t.machine.encoder_offset(i)) <= t.bounds.max_correction[i]))
@@ -222,9 +222,19 @@ FkReport<double> rus6_reached(const Rus6Geometry<double>& g, const Vec6<double>&
 }
 }  // namespace
 
-std::unique_ptr<ActualMachine> Rus6Family::actual_machine(const Robot& nominal, const Robot& actual) const {
+std::unique_ptr<ActualMachine> Rus6FamilyKinematics::actual_machine(const Robot& nominal, const Robot& actual) const {
   return std::make_unique<CommandsThenFk<Rus6Geometry<double>, rus6_commands, rus6_reached>>(nominal.rus6(),
                                                                                               actual.rus6());
+}
+
+const Family& rus6_family() {
+  static const Rus6FamilyDescription description;
+  static const Rus6FamilyKinematics kinematics;
+  static const Rus6FamilyErrorModel error_model;
+  static const Rus6FamilyMeasurement measurement;
+  static const Rus6FamilyTable table;
+  static const Family family(description, kinematics, error_model, measurement, table, nullptr);
+  return family;
 }
 
 }  // namespace kincal::identify

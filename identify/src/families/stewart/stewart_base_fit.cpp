@@ -1,5 +1,5 @@
 // seed 001's base fit (the iterated least squares) as a linear problem at
-// its solution: StewartFamily::fit_base.
+// its solution: StewartFamilyPipeline::fit_base.
 #include "effects/base_fit.hpp"
 #include "families/stewart/stewart_family.hpp"
 #include "kincal/core/stewart.hpp"
@@ -8,9 +8,9 @@
 
 namespace kincal::identify {
 
-detail::BaseModel StewartFamily::fit_base(const Robot& robot, const PoseTable& data,
-                                          const std::vector<std::optional<EffectNode>>& en,
-                                          std::optional<EstimatorKind>, bool, double) const {
+detail::BaseModel StewartFamilyPipeline::fit_base(const Robot& robot, const PoseTable& data,
+                                                  const std::vector<std::optional<EffectNode>>& en,
+                                                  std::optional<EstimatorKind>, bool, double) const {
   using namespace detail;  // seed 001's model is fitted by OLS, to its minimum
   const StewartCalibration cal = calibrate_stewart(robot, data);
   const StewartGeometry<double> g = stewart_with_errors(without_limits(robot.stewart()), cal.theta);  // measured rows: no limits

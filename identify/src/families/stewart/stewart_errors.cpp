@@ -63,7 +63,7 @@ class StewartErrors final : public FamilyErrors {
 }  // namespace
 }  // namespace detail
 
-std::unique_ptr<detail::FamilyErrors> StewartFamily::errors(const Robot& open) const {
+std::unique_ptr<detail::FamilyErrors> StewartFamilyErrorModel::errors(const Robot& open) const {
   return std::make_unique<detail::StewartErrors>(open);
 }
 

@@ -10,7 +10,7 @@ namespace kincal::identify {
 
 // ---------------------------------------------------------------- description
 
-Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
+Robot StewartFamilyDescription::parse(const nlohmann::json& doc, const detail::DescriptionReader& r) const {
   r.object(doc, "",
            {"format", "version", "family", "name", "units", "base_joints", "platform_joints", "stroke", "home"},
            r.with_common_optional({"length_offset", "leg_offset_sq"}));
@@ -45,7 +45,7 @@ Robot StewartFamily::parse(const nlohmann::json& doc, const detail::DescriptionR
   return robot;
 }
 
-void StewartFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
+void StewartFamilyDescription::write(const Robot& robot, nlohmann::ordered_json& j) const {
   const StewartGeometry<double>& g = robot.stewart();
   j["base_joints"] = detail::points_json<6>(g.base);
   j["platform_joints"] = detail::points_json<6>(g.platform);
@@ -56,7 +56,7 @@ void StewartFamily::write(const Robot& robot, nlohmann::ordered_json& j) const {
   j["home"] = {{"x", h(0)}, {"y", h(1)}, {"z", h(2)}, {"rx", h(3)}, {"ry", h(4)}, {"rz", h(5)}};
 }
 
-void StewartFamily::summarize(const Robot& robot, std::ostream& os) const {
+void StewartFamilyDescription::summarize(const Robot& robot, std::ostream& os) const {
   const StewartGeometry<double>& g = robot.stewart();
   os << "base joints B_i (mm):\n";
   for (int i = 0; i < 6; ++i) os << "  " << i + 1 << ": " << g.base.col(i).transpose() << "\n";
@@ -67,33 +67,33 @@ void StewartFamily::summarize(const Robot& robot, std::ostream& os) const {
 
 // ---------------------------------------------------------------- kinematics
 
-TableBounds<double> StewartFamily::default_bounds(const Robot& robot) const {
+TableBounds<double> StewartFamilyTable::default_bounds(const Robot& robot) const {
   return kincal::default_bounds(robot.stewart());
 }
 
-void StewartFamily::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
+void StewartFamilyKinematics::joint_limits(const Robot& robot, Vec6<double>& lo, Vec6<double>& hi) const {
   lo = robot.stewart().min_length;
   hi = robot.stewart().max_length;
 }
 
-Status StewartFamily::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
-                              double*) const {
+Status StewartFamilyKinematics::inverse(const Robot& robot, const Pose<double>& pose, Vec6<double>& q, Mat6<double>* J,
+                                        double*) const {
   return stewart_ik(robot.stewart(), pose, q, J);
 }
 
-bool StewartFamily::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
-                                     Mat6<double>& J) const {
+bool StewartFamilyKinematics::forward_jacobian(const Robot& robot, const Pose<double>& pose, Vec6<double>& q,
+                                               Mat6<double>& J) const {
   Mat6<double> Jik;
   if (stewart_ik(robot.stewart(), pose, q, &Jik) != Status::Ok) return false;
   J = Jik.inverse();  // q̇ = J_ik·twist (stewart.hpp); the error model's dl columns are J_ik⁻¹
   return all_finite(J);
 }
 
-double StewartFamily::reach(const Robot& robot) const { return robot.stewart().base.colwise().norm().maxCoeff(); }
-
-// ---------------------------------------------------------------- error model
-
-namespace {
+double StewartFamilyKinematics::reach(const Robot& robot) const { return robot.stewart().base.colwise().norm().maxCoeff(); }
+                                      
+                                      // ---------------------------------------------------------------- error model
+                                      
+                                      namespace {
 
 const char* const kAxes[3] = {"X", "Y", "Z"};
 const char* const kAxesLower[3] = {"x", "y", "z"};
@@ -142,13 +142,13 @@ FkReport<double> stewart_reached(const StewartGeometry<double>& g, const Vec6<do
 
 }  // namespace
 
-const std::vector<ParameterSpec>& StewartFamily::parameter_specs(const Robot& robot) const {
+const std::vector<ParameterSpec>& StewartFamilyErrorModel::parameter_specs(const Robot& robot) const {
   static const std::vector<ParameterSpec> table = stewart_table();
   static const std::vector<ParameterSpec> with_leg_offsets = stewart_table_with_leg_offsets();
   return robot.models_leg_offsets ? with_leg_offsets : table;
 }
 
-AnyCalibrationTable StewartFamily::machine_table(const CalibrationModel& model) const {
+AnyCalibrationTable StewartFamilyTable::machine_table(const CalibrationModel& model) const {
   const StewartGeometry<double>& nominal = model.nominal.stewart();
   StewartCalibrationTable<double> t{};
   t.machine.nominal = to_table(nominal);
@@ -157,7 +157,7 @@ AnyCalibrationTable StewartFamily::machine_table(const CalibrationModel& model) 
   return t;
 }
 
-std::vector<TableGroup> StewartFamily::machine_groups(const Robot&) const {
+std::vector<TableGroup> StewartFamilyTable::machine_groups(const Robot&) const {
   std::vector<TableGroup> g;
   for (const char* part : {"machine.nominal.", "machine.calibrated."})
     for (const auto& [name, n] : {std::pair{"base", 18}, {"platform", 18}, {"length_offset", 6}, {"leg_offset_sq", 6},
@@ -167,8 +167,8 @@ std::vector<TableGroup> StewartFamily::machine_groups(const Robot&) const {
   return g;
 }
 
-std::string StewartFamily::machine_limit_violation(const AnyCalibrationTable& table,
-                                                   const MachineLimits<double>& l) const {
+std::string StewartFamilyTable::machine_limit_violation(const AnyCalibrationTable& table,
+                                                        const MachineLimits<double>& l) const {
   using detail::first_above;
   using detail::key_note;
   using detail::table_number;
@@ -195,9 +195,20 @@ std::string StewartFamily::machine_limit_violation(const AnyCalibrationTable& ta
   return why;
 }
 
-std::unique_ptr<ActualMachine> StewartFamily::actual_machine(const Robot& nominal, const Robot& actual) const {
+std::unique_ptr<ActualMachine> StewartFamilyKinematics::actual_machine(const Robot& nominal, const Robot& actual) const {
   return std::make_unique<CommandsThenFk<StewartGeometry<double>, stewart_commands, stewart_reached>>(
       nominal.stewart(), actual.stewart());
+}
+
+const Family& stewart_family() {
+  static const StewartFamilyDescription description;
+  static const StewartFamilyKinematics kinematics;
+  static const StewartFamilyErrorModel error_model;
+  static const StewartFamilyMeasurement measurement;
+  static const StewartFamilyTable table;
+  static const StewartFamilyPipeline pipeline;
+  static const Family family(description, kinematics, error_model, measurement, table, &pipeline);
+  return family;
 }
 
 }  // namespace kincal::identify

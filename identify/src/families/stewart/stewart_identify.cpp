@@ -12,15 +12,15 @@
 
 namespace kincal::identify {
 
-void StewartFamily::check_identify_options(const IdentifyOptions& options) const {
+void StewartFamilyPipeline::check_identify_options(const IdentifyOptions& options) const {
   if (options.estimator == "liu")
     throw InputError("--estimator liu: the 6-UPS (seed 001) calibration offers ols, ridge and pcr; liu is seed "
                      "000's estimator for the hybrid's fine stage");
   if (!options.coarse_layers.empty()) throw InputError("--coarse-layers applies to the hybrid's coarse stage (seed 000)");
 }
 
-Identification StewartFamily::identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
-                                           std::ostream& narrative) const {
+Identification StewartFamilyPipeline::identify_own(const Robot& robot, const PoseTable& data, const IdentifyOptions& options,
+                                                   std::ostream& narrative) const {
   Identification out;
   const std::string estimator = options.estimator.empty() ? "ols" : options.estimator;
   StewartCalibrationOptions so;
