@@ -348,6 +348,37 @@ TEST(CoreRus6, FkFromHomeToGuideBarPose) {
   EXPECT_LT(position_error(found, target), 1e-10);
 }
 
+TEST(CoreRus6, FkFromHomeOverTheBoxInAtMostFiveStepsToTheIkPose) {
+  // Random poses over the whole test box, each solved from home (a cold
+  // start): the chord steps near the solution (six_distance_fk) must not
+  // cost a step or accuracy anywhere, in double and in float.
+  const Rus6Geometry<double> gd = make_rus6_ref<double>();
+  const Rus6Geometry<float> gf = gd.cast<float>();
+  int worst_d = 0, worst_f = 0;
+  double error_d = 0, error_f = 0;
+  for (const auto& off : box_offsets(300, kBoxMm, kBoxRad, 29)) {
+    const Pose<double> target = offset_pose<double>(gd.home, off.data());
+    Vec6<double> qd;
+    ASSERT_EQ(rus6_ik(gd, target, qd), Status::Ok);
+    Pose<double> found;
+    const FkReport<double> rd = rus6_fk(gd, qd, found);
+    ASSERT_EQ(rd.status, Status::Ok);
+    worst_d = std::max(worst_d, rd.iterations);
+    error_d = std::max(error_d, position_error(found, target));
+    Pose<float> found_f;
+    const FkReport<float> rf = rus6_fk(gf, Vec6<float>(qd.cast<float>()), found_f);
+    ASSERT_EQ(rf.status, Status::Ok);
+    worst_f = std::max(worst_f, rf.iterations);
+    error_f = std::max(error_f, position_error(found_f.template cast<double>(), target));
+  }
+  std::printf("FK from home over the box: double <= %d steps, %.3g mm; float <= %d steps, %.3g mm\n", worst_d, error_d,
+              worst_f, error_f);
+  EXPECT_LE(worst_d, 5);
+  EXPECT_LE(worst_f, 4);
+  EXPECT_LT(error_d, 1e-9);
+  EXPECT_LT(error_f, 5e-4);  // float: ~7 digits of a 300 mm loop, through q rounded to float
+}
+
 // ---- Jacobians ---------------------------------------------------------------
 
 template <class Scalar> void check_inverse_jacobian_against_differences(double h, double tol) {
