@@ -18,6 +18,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -308,6 +309,27 @@ class Family {
   const FamilyTable& table_;
   const FamilyPipeline* own_pipeline_;
 };
+
+// The one Family of the capability classes given (each default-constructed,
+// once): what a family's folder returns from its <name>_family(). Pipeline
+// void: the family has no own pipeline.
+template <class Description, class Kinematics, class ErrorModel, class Measurement, class Table,
+          class Pipeline = void>
+const Family& family_of_capabilities() {
+  static const Description description;
+  static const Kinematics kinematics;
+  static const ErrorModel error_model;
+  static const Measurement measurement;
+  static const Table table;
+  if constexpr (std::is_void_v<Pipeline>) {
+    static const Family family(description, kinematics, error_model, measurement, table, nullptr);
+    return family;
+  } else {
+    static const Pipeline pipeline;
+    static const Family family(description, kinematics, error_model, measurement, table, &pipeline);
+    return family;
+  }
+}
 
 // The family of a robot (every Robot has one; std::logic_error if its
 // geometry has no registered family).

@@ -347,14 +347,12 @@ std::unique_ptr<ActualMachine> HybridFamilyKinematics::actual_machine(const Robo
 }
 
 const Family& hybrid_family() {
-  static const HybridFamilyDescription description;
-  static const HybridFamilyKinematics kinematics;
-  static const HybridFamilyErrorModel error_model;
-  static const HybridFamilyMeasurement measurement;
-  static const HybridFamilyTable table;
-  static const HybridFamilyPipeline pipeline;
-  static const Family family(description, kinematics, error_model, measurement, table, &pipeline);
-  return family;
+  return family_of_capabilities<HybridFamilyDescription,
+                                HybridFamilyKinematics,
+                                HybridFamilyErrorModel,
+                                HybridFamilyMeasurement,
+                                HybridFamilyTable,
+                                HybridFamilyPipeline>();
 }
 
 }  // namespace kincal::identify

@@ -228,13 +228,11 @@ std::unique_ptr<ActualMachine> Rus6FamilyKinematics::actual_machine(const Robot&
 }
 
 const Family& rus6_family() {
-  static const Rus6FamilyDescription description;
-  static const Rus6FamilyKinematics kinematics;
-  static const Rus6FamilyErrorModel error_model;
-  static const Rus6FamilyMeasurement measurement;
-  static const Rus6FamilyTable table;
-  static const Family family(description, kinematics, error_model, measurement, table, nullptr);
-  return family;
+  return family_of_capabilities<Rus6FamilyDescription,
+                                Rus6FamilyKinematics,
+                                Rus6FamilyErrorModel,
+                                Rus6FamilyMeasurement,
+                                Rus6FamilyTable>();
 }
 
 }  // namespace kincal::identify

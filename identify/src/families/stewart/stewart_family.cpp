@@ -201,14 +201,12 @@ std::unique_ptr<ActualMachine> StewartFamilyKinematics::actual_machine(const Rob
 }
 
 const Family& stewart_family() {
-  static const StewartFamilyDescription description;
-  static const StewartFamilyKinematics kinematics;
-  static const StewartFamilyErrorModel error_model;
-  static const StewartFamilyMeasurement measurement;
-  static const StewartFamilyTable table;
-  static const StewartFamilyPipeline pipeline;
-  static const Family family(description, kinematics, error_model, measurement, table, &pipeline);
-  return family;
+  return family_of_capabilities<StewartFamilyDescription,
+                                StewartFamilyKinematics,
+                                StewartFamilyErrorModel,
+                                StewartFamilyMeasurement,
+                                StewartFamilyTable,
+                                StewartFamilyPipeline>();
 }
 
 }  // namespace kincal::identify
