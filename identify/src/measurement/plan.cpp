@@ -261,7 +261,7 @@ class DesignRows {
       col += k;
     }
     if (!T.allFinite()) return false;
-    A = whitening().asDiagonal() * model_.map(pose) * T;  // whitened H = M·T
+    model_.design_into(pose, T, whitening(), A);  // whitened H = M·T
     P = T.topRows(3);
     return true;
   }
