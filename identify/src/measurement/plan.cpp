@@ -14,6 +14,7 @@
 #include <random>
 #include <sstream>
 
+#include "estimate/scaled_design.hpp"
 #include "families/family.hpp"
 #include "families/family_errors.hpp"
 #include "kincal/identify/decompositions.hpp"
@@ -801,7 +802,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
     if (p > base_p) {
       const MatrixXd base = Ad.leftCols(base_p) * column_scales(Ad.leftCols(base_p)).cwiseInverse().asDiagonal();
       Eigen::ColPivHouseholderQR<MatrixXd> qr(base);
-      qr.setThreshold(1e-10);
+      qr.setThreshold(detail::kRankThreshold);
       Index col = base_p;
       for (const Effect* e : effects) {
         const Index k = Index(e->parameter_names(robot).size());
