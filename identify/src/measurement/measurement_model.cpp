@@ -67,10 +67,18 @@ Eigen::MatrixXd MeasurementModel::map(const Pose<double>& pose) const {
 }
 
 Eigen::MatrixXd MeasurementModel::design(const Pose<double>& pose, const Eigen::Ref<const Eigen::MatrixXd>& T) const {
-  if (kind_ == Kind::FullPose) return T;  // M = I
-  Eigen::MatrixXd H(rows(), T.cols());
-  design_into(pose, T, H);
-  return H;
+  switch (kind_) {
+    case Kind::FullPose: return T;  // M = I
+    // A fresh result: the product straight into it (design_into's Ref
+    // arguments cost the target fit's small products ~30 % more).
+    case Kind::Targets: return target_map(registration_, pose, points_) * T;
+    case Kind::Gauge: {
+      Eigen::MatrixXd H(9, T.cols());
+      design_into(pose, T, H);
+      return H;
+    }
+  }
+  return {};
 }
 
 void MeasurementModel::design_into(const Pose<double>& pose, const Eigen::Ref<const Eigen::MatrixXd>& T,
