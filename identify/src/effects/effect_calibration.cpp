@@ -11,6 +11,7 @@
 
 #include "effects/base_fit.hpp"
 #include "estimate/least_squares_step.hpp"
+#include "estimate/scaled_design.hpp"
 #include "families/family.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/effects.hpp"
@@ -75,12 +76,8 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   const MatrixXd X = joint_design(robot, list, held, base, H, values);
   const Index free = X.cols() - H.cols();
   if (free == 0 || X.rows() == 0) return std::nullopt;
-  VectorXd scale(X.cols());
-  for (Index j = 0; j < X.cols(); ++j) scale(j) = X.col(j).norm() > 0 ? X.col(j).norm() : 1.0;
-  const Eigen::JacobiSVD<MatrixXd> svd(X * scale.cwiseInverse().asDiagonal(), Eigen::ComputeThinV);
-  const VectorXd& sv = svd.singularValues();
-  Index rank = 0;
-  while (rank < sv.size() && sv(rank) > 1e-10 * sv(0)) ++rank;
+  const detail::ScaledDesign scaled(X, true);
+  const Index rank = scaled.rank();
   const double dof = double(X.rows() - rank);
   if (dof < 1) return std::nullopt;
   // The residual at the solution (y itself: the base is at its minimum for
@@ -99,15 +96,12 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
   // First, a parameter whose column is (to kBaseCopyShare) in the span of
   // the base design: the least outside, held whatever its t.
   {
-    MatrixXd Hs = H;
-    for (Index j = 0; j < Hs.cols(); ++j)
-      if (Hs.col(j).norm() > 0) Hs.col(j) /= Hs.col(j).norm();
-    const Eigen::CompleteOrthogonalDecomposition<MatrixXd> base_span(Hs);
+    const detail::ScaledLeastSquares base_span(H);
     std::optional<HeldParameter> copy;
     each_free([&](const Effect& e, const std::string& name, std::size_t j, Index c) {
       const VectorXd g = X.col(c);
       if (!(g.norm() > 0)) return;
-      const double outside = (g - Hs * base_span.solve(g)).norm() / g.norm();
+      const double outside = (g - H * base_span.solve(g)).norm() / g.norm();
       if (outside < kBaseCopyShare && (!copy || outside < copy->outside_base))
         copy = HeldParameter{e.name(), name, j, 0.0, 1.0, std::size_t(free), outside};
     });
@@ -118,11 +112,9 @@ std::optional<HeldParameter> least_significant(const Robot& robot, const std::ve
     HeldParameter p{e.name(), name, j, 0.0, 1.0, std::size_t(free)};
     // Variance of the scaled coefficient: Σ_k V_ck² / σ_k² over the rank;
     // a column with a part outside the rank (collinear) is not identified.
-    const VectorXd v = svd.matrixV().row(c).transpose();
-    const double outside = v.tail(v.size() - rank).squaredNorm();
-    if (X.col(c).norm() > 0 && outside < 1e-12) {
-      const double var = (v.head(rank).array().square() / sv.head(rank).array().square()).sum() * sigma2;
-      p.t = values.values.at(e.name())(Index(j)) * scale(c) / std::sqrt(var);
+    if (X.col(c).norm() > 0 && scaled.outside_rank(c) < 1e-12) {
+      const double var = scaled.scaled_variance(c) * sigma2;
+      p.t = values.values.at(e.name())(Index(j)) * scaled.scale()(c) / std::sqrt(var);
       p.p_value = f_distribution_upper_tail(p.t * p.t, 1.0, dof);
     }
     if (!worst || p.p_value > worst->p_value) worst = p;

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "estimate/estimator_detail.hpp"
+#include "estimate/scaled_design.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -166,7 +167,7 @@ LinearProblem on_independent_columns(const LinearProblem& problem) {
   for (Index j = 0; j < scaled.cols(); ++j)
     if (scaled.col(j).norm() > 0) scaled.col(j) /= scaled.col(j).norm();
   Eigen::ColPivHouseholderQR<MatrixXd> qr(scaled);
-  qr.setThreshold(1e-10);  // as the diagnosis ranks its designs
+  qr.setThreshold(detail::kRankThreshold);  // as the diagnosis ranks its designs
   const Index rank = qr.rank();
   if (rank == problem.H.cols()) return problem;
   LinearProblem out = problem;

@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "estimate/estimator_detail.hpp"
+#include "estimate/scaled_design.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/identifiability.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -221,7 +222,7 @@ PartialRidgeGcv::PartialRidgeGcv(const MatrixXd& X, const VectorXd& z, Index pen
     for (Index j = 0; j < E.cols(); ++j)
       if (E.col(j).norm() > 0) E.col(j) /= E.col(j).norm();
     Eigen::ColPivHouseholderQR<MatrixXd> qr(E);
-    qr.setThreshold(1e-10);
+    qr.setThreshold(detail::kRankThreshold);
     free_rank_ = qr.rank();
     const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(X.rows(), free_rank_);
     A -= Q * (Q.transpose() * A);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "estimate/scaled_design.hpp"
 #include "kincal/identify/decompositions.hpp"
 
 namespace kincal::identify::detail {
@@ -9,22 +10,6 @@ namespace kincal::identify::detail {
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-
-namespace {
-
-// Column norms (1 for a zero column): the scaling of every solve here.
-VectorXd column_scale(const MatrixXd& X) {
-  VectorXd scale(X.cols());
-  for (Index j = 0; j < X.cols(); ++j) {
-    const double n = X.col(j).norm();
-    scale(j) = n > 0 ? n : 1.0;
-  }
-  return scale;
-}
-
-constexpr double kRankThreshold = 1e-10;  // relative to the largest pivot
-
-}  // namespace
 
 ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scale(X)) {
   cod_.setThreshold(kRankThreshold);

@@ -17,7 +17,8 @@ namespace kincal::identify::detail {
 // orthogonal decomposition (columns in mm and rad, or per unit of an effect
 // input, differ by orders of magnitude; never the normal equations): a zero
 // column or one in the span of the others gets the minimum-norm share (0).
-// Relative rank threshold 1e-10. One factorisation, any number of solves.
+// The rank by kRankThreshold on the decomposition's pivots (scaled_design.hpp,
+// the one rule). One factorisation, any number of solves.
 class ScaledLeastSquares {
  public:
   explicit ScaledLeastSquares(const Eigen::MatrixXd& X);

@@ -14,6 +14,7 @@
 #include "kincal/identify/outliers.hpp"
 #include "kincal/identify/target_measurement.hpp"
 #include "estimate/least_squares_step.hpp"
+#include "estimate/scaled_design.hpp"
 #include "families/family.hpp"
 #include "families/family_errors.hpp"
 
@@ -364,22 +365,18 @@ TargetCalibration calibrate_targets(const Robot& nominal, const PoseTable& data,
   out.registration = current.registration;
   out.targets = current.targets;
 
-  // Rank, conditioning, covariance: the SVD of the column-scaled design.
+  // Rank, conditioning, covariance: the SVD of the column-scaled design,
+  // the rank by the rule of the descent's own steps (scaled_design.hpp).
   // Without the statistics the singular values alone decide the rank; V,
   // half of the SVD's cost, is computed only where the check fails, to name
   // the combination.
-  const Eigen::VectorXd scale = A.colwise().norm().cwiseMax(1e-300).transpose();
-  const Eigen::MatrixXd scaled = A * scale.cwiseInverse().asDiagonal();
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(scaled, options.statistics ? Eigen::ComputeThinV : 0);
-  const Eigen::VectorXd s = svd.singularValues();
-  out.condition_number = s(0) / s(s.size() - 1);
-  out.rank = int((s.array() > effective_rcond(kDefaultRcond, n, p) * s(0)).count());
+  const detail::ScaledDesign scaled(A, options.statistics);
+  const Eigen::VectorXd& s = scaled.singular_values();
+  out.condition_number = scaled.condition_number();
+  out.rank = int(scaled.rank());
   out.nodes = nodes.size();
   out.sigma_mm = std::sqrt(y.squaredNorm() / double(std::max<Eigen::Index>(1, n - p)));
-  auto directions = [&]() -> Eigen::MatrixXd {  // x per singular direction
-    if (!svd.computeV()) svd.compute(scaled, Eigen::ComputeThinV);
-    return N * (scale.cwiseInverse().asDiagonal() * svd.matrixV());
-  };
+  auto directions = [&]() -> Eigen::MatrixXd { return N * scaled.directions(); };  // x per singular direction
   if (out.rank < p) {
     const Eigen::MatrixXd NV = directions();
     const WeakCombination w = weakest_combinations(NV.col(p - 1) * NV.col(p - 1).transpose(), unit_weights(layout),

@@ -65,7 +65,7 @@ void identification_jacobian(const HybridErrorModel& model, MeasurementKind kind
     if (st != Status::Ok)
       throw InputError("identification Jacobian: node " + std::to_string(k) + ": error model failed (" + to_string(st) +
                        ")");
-    H.middleRows(k * r, r).noalias() = measurement.map(node) * B;
+    measurement.design_into(node, B, H.middleRows(k * r, r));
   }
 }
 

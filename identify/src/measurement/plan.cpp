@@ -14,6 +14,7 @@
 #include <random>
 #include <sstream>
 
+#include "estimate/scaled_design.hpp"
 #include "families/family.hpp"
 #include "families/family_errors.hpp"
 #include "kincal/identify/decompositions.hpp"
@@ -261,7 +262,7 @@ class DesignRows {
       col += k;
     }
     if (!T.allFinite()) return false;
-    A = whitening().asDiagonal() * model_.map(pose) * T;  // whitened H = M·T
+    model_.design_into(pose, T, whitening(), A);  // whitened H = M·T
     P = T.topRows(3);
     return true;
   }
@@ -476,25 +477,25 @@ std::vector<std::size_t> motion_order(const std::vector<Vec6<double>>& q, const 
   return order;
 }
 
-}  // namespace
 
-// ---------------------------------------------------------------- the plan
+// ---------------------------------------------------------------- the plan's steps
 
-MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
-  const auto start = std::chrono::steady_clock::now();
-  auto progress = [&](const std::string& s) {
-    if (o.progress) o.progress(s);
-  };
-  MeasurementPlan plan;
-  if (!(o.noise_mm > 0) || !std::isfinite(o.noise_mm)) throw InputError("", 0, 0, "the noise level must be positive");
-  if (!(o.margin >= 0 && o.margin < 0.5)) throw InputError("", 0, 0, "the margin must lie in [0, 0.5)");
-  if (!(o.prior_mm > 0)) throw InputError("", 0, 0, "the prior must be positive");
-  // Each candidate keeps its design rows (a few KiB): a million is ~10 GiB.
-  if (o.sample_count > 200000) throw InputError("", 0, 0, "at most 200000 sampled candidates (--samples)");
+// Approach directions of one pose, ±1 per joint at random (backlash).
+Eigen::VectorXi random_directions(std::mt19937_64& rng) {
+  Eigen::VectorXi d(6);
+  for (int i = 0; i < 6; ++i) d(i) = (rng() & 1u) ? 1 : -1;
+  return d;
+}
 
-  // Effects: known, and what a plan can do for them.
+// The effects the criterion includes. thermal and an effect needing inputs
+// no pose can choose are left out, with a note saying why (a plan cannot
+// create a temperature span); backlash adds how to approach each pose.
+struct PlannedEffects {
   std::vector<const Effect*> effects;
   bool backlash = false;
+};
+PlannedEffects planned_effects(const Robot& robot, const PlanOptions& o, MeasurementPlan& plan) {
+  PlannedEffects out;
   for (const std::string& name : o.effects) {
     const Effect* e = find_effect(robot, name);
     if (e == nullptr) throw InputError("", 0, 0, "unknown effect '" + name + "' (known: " + effect_names(robot) + ")");
@@ -513,46 +514,47 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
       plan.notes.push_back(name + " is not in the criterion: it needs what a plan cannot choose (" + missing + ")");
       continue;
     }
-    effects.push_back(e);
+    out.effects.push_back(e);
     plan.effects.push_back(name);
-    backlash = backlash || name == "backlash";
+    out.backlash = out.backlash || name == "backlash";
   }
-  if (backlash)
+  if (out.backlash)
     plan.notes.push_back("backlash: each pose has approach directions dir1..dir6; approach it so that joint i's "
                          "last move was in direction dir_i (for example from a point 1 mm back along each joint)");
+  return out;
+}
 
-  DesignRows design(robot, o, plan.notes);
-  plan.rows_per_pose = std::size_t(design.rows_per_pose());
-  plan.measure = design.measure();
-  const Workspace workspace(robot, o);
-  std::mt19937_64 rng(o.seed);
-  auto random_dir = [&]() {
-    Eigen::VectorXi d(6);
-    for (int i = 0; i < 6; ++i) d(i) = (rng() & 1u) ? 1 : -1;
-    return d;
-  };
-
-  // Candidates: the user's, or a uniform sample of the box each degree of
-  // freedom reaches alone from home (bisection), kept where usable.
-  const Vec6<double> home = robot.home_pose().to_xyz_rpy();
-  Vec6<double> reach_lo, reach_hi;
-  {
-    const double size = family_of(robot).kinematics().reach(robot);
-    for (int d = 0; d < 6; ++d)
-      for (int sign : {-1, 1}) {
-        double good = 0, bad = d < 3 ? 2 * size : 1.5;
-        Vec6<double> q;
-        for (int it = 0; it < 30; ++it) {
-          const double mid = 0.5 * (good + bad);
-          Vec6<double> x = home;
-          x(d) += sign * mid;
-          (workspace.usable(x, q) ? good : bad) = mid;
-        }
-        (sign < 0 ? reach_lo : reach_hi)(d) = sign * good;
+// How far each degree of freedom reaches alone from home, both ways
+// (bisection on usability): the box candidates are drawn from, the hand
+// grid is laid over and held-out poses are spread in.
+struct Reach {
+  Vec6<double> lo, hi;
+};
+Reach axis_reach(const Robot& robot, const Workspace& workspace, const Vec6<double>& home) {
+  Reach reach;
+  const double size = family_of(robot).kinematics().reach(robot);
+  for (int d = 0; d < 6; ++d)
+    for (int sign : {-1, 1}) {
+      double good = 0, bad = d < 3 ? 2 * size : 1.5;
+      Vec6<double> q;
+      for (int it = 0; it < 30; ++it) {
+        const double mid = 0.5 * (good + bad);
+        Vec6<double> x = home;
+        x(d) += sign * mid;
+        (workspace.usable(x, q) ? good : bad) = mid;
       }
-  }
+      (sign < 0 ? reach.lo : reach.hi)(d) = sign * good;
+    }
+  return reach;
+}
+
+// The candidates: the user's (each refused one named once, the first), or a
+// uniform sample of the reach box, kept where usable. plan.candidates counts
+// what was offered or drawn.
+std::vector<Candidate> candidate_pool(const PlanOptions& o, const Workspace& workspace, const Vec6<double>& home,
+                                      const Reach& reach, bool backlash, std::mt19937_64& rng, MeasurementPlan& plan,
+                                      std::string& first_rejected) {
   std::vector<Candidate> pool;
-  std::string first_rejected;
   if (!o.candidates.rows.empty()) {
     plan.candidates = o.candidates.rows.size();
     for (const PoseRow& row : o.candidates.rows) {
@@ -566,7 +568,7 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
           first_rejected = o.candidates.file + ":" + std::to_string(row.line) + ": row '" + row.id + "': " + why;
         continue;
       }
-      if (backlash) c.dir = row.dir ? Eigen::VectorXi(*row.dir) : random_dir();
+      if (backlash) c.dir = row.dir ? Eigen::VectorXi(*row.dir) : random_directions(rng);
       pool.push_back(std::move(c));
     }
   } else {
@@ -576,109 +578,169 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
     while (pool.size() < o.sample_count && draws < max_draws) {
       ++draws;
       Candidate c;
-      for (int d = 0; d < 6; ++d) c.xyzrpy(d) = home(d) + reach_lo(d) + u(rng) * (reach_hi(d) - reach_lo(d));
+      for (int d = 0; d < 6; ++d) c.xyzrpy(d) = home(d) + reach.lo(d) + u(rng) * (reach.hi(d) - reach.lo(d));
       if (!workspace.usable(c.xyzrpy, c.q)) continue;
-      if (backlash) c.dir = random_dir();
+      if (backlash) c.dir = random_directions(rng);
       pool.push_back(std::move(c));
     }
     plan.candidates = draws;
   }
+  return pool;
+}
 
-  for (const Effect* e : effects) design.add_effect(e);
-  const Index r = design.rows_per_pose();
-
-  // Design rows of the pool.
-  auto rows_of = [&](std::vector<Candidate>& cs, MatrixXd& A, MatrixXd& P) {
-    const Index p = design.parameters();
-    const std::vector<std::optional<EffectNode>> nodes =
-        effects.empty() ? std::vector<std::optional<EffectNode>>(cs.size()) : nodes_of(robot, cs, backlash);
-    A.resize(Index(cs.size()) * r, p);
-    P.resize(Index(cs.size()) * 3, p);
-    std::vector<Candidate> kept;
-    Index n = 0;
-    for (std::size_t k = 0; k < cs.size(); ++k) {
-      if (!design.rows(cs[k], nodes[k], A.middleRows(n * r, r), P.middleRows(n * 3, 3))) continue;
-      kept.push_back(cs[k]);
-      ++n;
-    }
-    A.conservativeResize(n * r, p);
-    P.conservativeResize(n * 3, p);
-    cs = std::move(kept);
-  };
-  MatrixXd A, P;
-  rows_of(pool, A, P);
-  if (design.selects_columns() && !pool.empty()) {
-    // Which of the 150 source errors the workspace can identify, from 200
-    // pool poses spread through it; the other columns leave A and P.
-    const Index base = design.base_parameters();
-    const std::size_t n = std::min<std::size_t>(pool.size(), 200);
-    MatrixXd H(Index(n) * r, base);
-    for (std::size_t k = 0; k < n; ++k) H.middleRows(Index(k) * r, r) = A.block(Index(k * pool.size() / n) * r, 0, r, base);
-    std::vector<Index> columns = design.select_columns(H);
-    for (Index j = base; j < A.cols(); ++j) columns.push_back(j);
-    A = MatrixXd(A(Eigen::all, columns));
-    P = MatrixXd(P(Eigen::all, columns));
-  }
-  const Index p = design.parameters();
-  plan.parameter_names = design.names();
-  if (Index(o.count) * r < p) {
-    const Index need = (p + r - 1) / r;
-    throw InputError("", 0, 0,
-                     std::to_string(o.count) + " poses give " + std::to_string(Index(o.count) * r) +
-                         " measured coordinates for " + std::to_string(p) + " parameters; plan at least " +
-                         std::to_string(need) + " poses (more than that to see the noise)");
-  }
-  progress(std::to_string(pool.size()) + " usable candidate poses of " + std::to_string(plan.candidates));
-  plan.usable_candidates = pool.size();
-  if (pool.size() < o.count + o.test_count)
-    throw InputError(o.candidates.rows.empty() ? robot.name : o.candidates.file, 0, 0,
-                     std::to_string(pool.size()) + " of " + std::to_string(plan.candidates) +
-                         " candidate poses are usable (reachable inside the limits with a margin of " +
-                         fixed(100 * o.margin, 1) + " %, away from singularities), fewer than the " +
-                         std::to_string(o.count + o.test_count) + " asked for" +
-                         (first_rejected.empty() ? std::string() : "; first rejected: " + first_rejected));
-
-  // The prior: parameter j moves the measured points by prior_mm RMS over
-  // the pool. Scaling each column by its prior standard deviation τ_j makes
-  // the prior precision the identity.
+// The prior: parameter j moves the measured points by prior_mm RMS over
+// the pool. Scaling each column by its prior standard deviation τ_j makes
+// the prior precision the identity.
+VectorXd prior_scale(const DesignRows& design, const MatrixXd& A, std::size_t pool_size, double prior_mm) {
+  const Index r = design.rows_per_pose(), p = design.parameters();
   VectorXd tau(p);
-  {
-    const VectorXd back = design.displacement_scale();
-    Index position_rows = 0;
-    for (Index i = 0; i < r; ++i) position_rows += design.position_row(i) ? 1 : 0;
-    for (Index j = 0; j < p; ++j) {
-      double ss = 0;
-      for (Index c = 0; c < Index(pool.size()); ++c)
-        for (Index i = 0; i < r; ++i)
-          if (design.position_row(i)) ss += std::pow(A(c * r + i, j) * back(i), 2);
-      const double rms = std::sqrt(ss / (double(pool.size()) * double(position_rows) / 3.0));
-      tau(j) = rms > 0 ? o.prior_mm / rms : 1.0;
+  const VectorXd back = design.displacement_scale();
+  Index position_rows = 0;
+  for (Index i = 0; i < r; ++i) position_rows += design.position_row(i) ? 1 : 0;
+  for (Index j = 0; j < p; ++j) {
+    double ss = 0;
+    for (Index c = 0; c < Index(pool_size); ++c)
+      for (Index i = 0; i < r; ++i)
+        if (design.position_row(i)) ss += std::pow(A(c * r + i, j) * back(i), 2);
+    const double rms = std::sqrt(ss / (double(pool_size) * double(position_rows) / 3.0));
+    tau(j) = rms > 0 ? prior_mm / rms : 1.0;
+  }
+  return tau;
+}
+
+// Held-out poses: farthest-point spread over the unchosen pool (marked in
+// `in` as they are taken), in coordinates scaled by each degree of
+// freedom's reach, so that the held-out error is judged over the workspace.
+std::vector<Index> held_out_poses(const std::vector<Candidate>& pool, const Vec6<double>& home, const Reach& reach,
+                                  std::size_t count, std::vector<bool>& in) {
+  std::vector<Index> test;
+  Vec6<double> scale = (reach.hi - reach.lo).cwiseMax(1e-9);
+  auto coord = [&](Index c) -> Vec6<double> { return (pool[std::size_t(c)].xyzrpy - home).cwiseQuotient(scale); };
+  std::vector<double> dist(pool.size(), std::numeric_limits<double>::infinity());
+  Vec6<double> centre = Vec6<double>::Zero();
+  for (const Candidate& c : pool) centre += (c.xyzrpy - home).cwiseQuotient(scale);
+  centre /= double(pool.size());
+  for (Index c = 0; c < Index(pool.size()); ++c) dist[std::size_t(c)] = (coord(c) - centre).norm();  // start far out
+  for (std::size_t k = 0; k < count; ++k) {
+    Index best = -1;
+    double far = -std::numeric_limits<double>::infinity();
+    for (Index c = 0; c < Index(pool.size()); ++c)
+      if (!in[std::size_t(c)] && dist[std::size_t(c)] > far) {
+        far = dist[std::size_t(c)];
+        best = c;
+      }
+    in[std::size_t(best)] = true;
+    test.push_back(best);
+    for (Index c = 0; c < Index(pool.size()); ++c) {
+      const double d = (coord(c) - coord(best)).norm();
+      dist[std::size_t(c)] = k == 0 ? d : std::min(dist[std::size_t(c)], d);
     }
   }
-  const MatrixXd As = A * tau.asDiagonal();
+  return test;
+}
 
-  // Evaluation poses for the predicted held-out error: chosen after the plan
-  // (--test) or an even sample of the pool.
-  std::vector<Index> evaluation;
+// The plan's poses (cal and test together) in motion order: nearest
+// neighbour and 2-opt over the largest joint move per range (a joint with no
+// limit: the candidates' span), from home; ids P001…/T001… unless the
+// candidate had one.
+void motion_ordered_poses(const Robot& robot, const Workspace& workspace, const std::vector<Candidate>& pool,
+                          const std::vector<Index>& chosen, const std::vector<Index>& test, bool backlash,
+                          MeasurementPlan& plan) {
+  std::vector<Index> rows = chosen;
+  rows.insert(rows.end(), test.begin(), test.end());
+  std::vector<Vec6<double>> q;
+  for (Index c : rows) q.push_back(pool[std::size_t(c)].q);
+  Vec6<double> range = workspace.range();
+  for (int i = 0; i < 6; ++i)
+    if (!(range(i) > 0)) {  // no limit: the span of the candidates
+      double lo = q.front()(i), hi = lo;
+      for (const Candidate& c : pool) {
+        lo = std::min(lo, c.q(i));
+        hi = std::max(hi, c.q(i));
+      }
+      range(i) = std::max(hi - lo, 1e-9);
+    }
+  Vec6<double> q_home;
+  if (robot.inverse(robot.home_pose(), q_home) != Status::Ok) q_home = q.front();
+  const std::vector<std::size_t> order = motion_order(q, q_home, range, plan.path_length);
+  plan.poses.has_role = true;
+  plan.poses.has_dir = backlash;
+  std::size_t cal = 0, held = 0;
+  for (std::size_t k : order) {
+    const Candidate& c = pool[std::size_t(rows[k])];
+    PoseRow row;
+    const bool is_test = k >= chosen.size();
+    row.role = is_test ? Role::Test : Role::Cal;
+    const std::string n = std::to_string(is_test ? ++held : ++cal);
+    row.id = !c.id.empty() ? c.id : (is_test ? "T" : "P") + std::string(n.size() < 3 ? 3 - n.size() : 0, '0') + n;
+    row.commanded = c.xyzrpy;
+    if (backlash) row.dir = c.dir;
+    plan.poses.rows.push_back(row);
+  }
+}
 
-  // Greedy start, then exchange passes.
+
+// The design rows of candidates `cs` (whitened A, r per pose; P, the
+// position rows in mm per unit), dropping the candidates whose model cannot
+// be evaluated.
+void candidate_rows(const Robot& robot, const DesignRows& design, const std::vector<const Effect*>& effects,
+                    bool backlash, std::vector<Candidate>& cs, MatrixXd& A, MatrixXd& P) {
+  const Index p = design.parameters(), r = design.rows_per_pose();
+  const std::vector<std::optional<EffectNode>> nodes =
+      effects.empty() ? std::vector<std::optional<EffectNode>>(cs.size()) : nodes_of(robot, cs, backlash);
+  A.resize(Index(cs.size()) * r, p);
+  P.resize(Index(cs.size()) * 3, p);
+  std::vector<Candidate> kept;
+  Index n = 0;
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    if (!design.rows(cs[k], nodes[k], A.middleRows(n * r, r), P.middleRows(n * 3, 3))) continue;
+    kept.push_back(cs[k]);
+    ++n;
+  }
+  A.conservativeResize(n * r, p);
+  P.conservativeResize(n * 3, p);
+  cs = std::move(kept);
+}
+
+// Which of the family's source errors (the hybrid's 150) the workspace can
+// identify, from 200 pool poses spread through it; the other columns leave
+// A and P (and the design).
+void keep_identifiable_columns(DesignRows& design, std::size_t pool_size, MatrixXd& A, MatrixXd& P) {
+  if (!design.selects_columns() || pool_size == 0) return;
+  const Index r = design.rows_per_pose(), base = design.base_parameters();
+  const std::size_t n = std::min<std::size_t>(pool_size, 200);
+  MatrixXd H(Index(n) * r, base);
+  for (std::size_t k = 0; k < n; ++k) H.middleRows(Index(k) * r, r) = A.block(Index(k * pool_size / n) * r, 0, r, base);
+  std::vector<Index> columns = design.select_columns(H);
+  for (Index j = base; j < A.cols(); ++j) columns.push_back(j);
+  A = MatrixXd(A(Eigen::all, columns));
+  P = MatrixXd(P(Eigen::all, columns));
+}
+
+// The chosen poses: the lazy greedy start, then exchange passes on a
+// shortlist (the criterion log det(I + Σ AᵀA) on the prior-scaled rows As;
+// plan.exchange_passes, plan.exchanges counted).
+template <class Progress>
+std::vector<Index> choose_poses(const MatrixXd& As, Index r, const PlanOptions& o, std::size_t pool_size,
+                                MeasurementPlan& plan, const Progress& progress) {
+  const Index p = As.cols();
   progress("choosing " + std::to_string(o.count) + " poses (greedy)");
   std::vector<Index> chosen = lazy_greedy(As, r, o.count);
-  std::vector<bool> in(pool.size(), false);
+  std::vector<bool> in(pool_size, false);
   for (Index c : chosen) in[std::size_t(c)] = true;
   // Exchange on a shortlist: the chosen poses and the unchosen ones that
   // would add most to them (a pose that adds little to the design is not
   // what an exchange brings in), then the shortlist drawn again from the
   // whole pool at the new design, until a round swaps nothing. Each pass
   // costs the shortlist's size, not the pool's, in rank-r updates.
-  const std::size_t shortlist_size = std::min(pool.size(), std::max<std::size_t>(400, 10 * o.count));
+  const std::size_t shortlist_size = std::min(pool_size, std::max<std::size_t>(400, 10 * o.count));
   for (int round = 0; round < 10 && plan.exchange_passes < o.max_exchange_passes; ++round) {
     std::vector<Index> shortlist = chosen;
     {
       DOptimal full(As, r);
       full.reset(chosen);
       std::vector<Index> rest;
-      for (Index c = 0; c < Index(pool.size()); ++c)
+      for (Index c = 0; c < Index(pool_size); ++c)
         if (!in[std::size_t(c)]) rest.push_back(c);
       const std::size_t extra = std::min(rest.size(), shortlist_size - std::min(shortlist_size, chosen.size()));
       std::partial_sort(rest.begin(), rest.begin() + std::ptrdiff_t(extra), rest.end(),
@@ -730,47 +792,22 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
     if (round_swaps == 0) break;
   }
 
-  // Held-out poses: farthest-point spread over the unchosen pool, in
-  // coordinates scaled by each degree of freedom's reach.
-  std::vector<Index> test;
-  if (o.test_count > 0) {
-    Vec6<double> scale = (reach_hi - reach_lo).cwiseMax(1e-9);
-    auto coord = [&](Index c) -> Vec6<double> {
-      return (pool[std::size_t(c)].xyzrpy - home).cwiseQuotient(scale);
-    };
-    std::vector<double> dist(pool.size(), std::numeric_limits<double>::infinity());
-    Vec6<double> centre = Vec6<double>::Zero();
-    for (const Candidate& c : pool) centre += (c.xyzrpy - home).cwiseQuotient(scale);
-    centre /= double(pool.size());
-    for (Index c = 0; c < Index(pool.size()); ++c) dist[std::size_t(c)] = (coord(c) - centre).norm();  // start far out
-    for (std::size_t k = 0; k < o.test_count; ++k) {
-      Index best = -1;
-      double far = -std::numeric_limits<double>::infinity();
-      for (Index c = 0; c < Index(pool.size()); ++c)
-        if (!in[std::size_t(c)] && dist[std::size_t(c)] > far) {
-          far = dist[std::size_t(c)];
-          best = c;
-        }
-      in[std::size_t(best)] = true;
-      test.push_back(best);
-      for (Index c = 0; c < Index(pool.size()); ++c) {
-        const double d = (coord(c) - coord(best)).norm();
-        dist[std::size_t(c)] = k == 0 ? d : std::min(dist[std::size_t(c)], d);
-      }
-    }
-    evaluation = test;
-  } else {
-    const std::size_t n = std::min<std::size_t>(pool.size(), 300);
-    for (std::size_t k = 0; k < n; ++k) evaluation.push_back(Index(k * pool.size() / n));
-  }
-  plan.evaluation_poses = evaluation.size();
-  MatrixXd Pe(Index(evaluation.size()) * 3, p);
-  for (std::size_t k = 0; k < evaluation.size(); ++k) Pe.middleRows(Index(k) * 3, 3) = P.middleRows(evaluation[k] * 3, 3);
-  const MatrixXd Pes = Pe * tau.asDiagonal();
+  return chosen;
+}
 
-  // The numbers of a design (its whitened rows A_d).
-  const Index base_p = design.base_parameters();
-  auto assess = [&](const std::string& name, const MatrixXd& Ad) {
+// The numbers of a design, its whitened rows A_d: rank and condition, the
+// criterion with the prior, each parameter's predicted standard error, the
+// predicted held-out error at the evaluation poses (Pes: their position rows,
+// prior-scaled) and each effect's confounding with the base.
+struct DesignAssessor {
+  const Robot& robot;
+  const DesignRows& design;
+  const std::vector<const Effect*>& effects;
+  const VectorXd& tau;
+  const MatrixXd& Pes;
+  std::size_t evaluation_poses;
+  DesignAssessment operator()(const std::string& name, const MatrixXd& Ad) const {
+    const Index r = design.rows_per_pose(), p = design.parameters(), base_p = design.base_parameters();
     DesignAssessment a;
     a.name = name;
     a.poses = std::size_t(Ad.rows() / r);
@@ -796,12 +833,12 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
     }
     // trace(Pe·Cov·Peᵀ) / poses, Cov = T·K⁻¹·T (in mm²).
     const double tr = (Pes * Kinv).cwiseProduct(Pes).sum();
-    a.predicted_test_um = 1e3 * std::sqrt(tr / double(evaluation.size()));
+    a.predicted_test_um = 1e3 * std::sqrt(tr / double(evaluation_poses));
     // Confounding: the share of each effect column's energy inside the base's span.
     if (p > base_p) {
       const MatrixXd base = Ad.leftCols(base_p) * column_scales(Ad.leftCols(base_p)).cwiseInverse().asDiagonal();
       Eigen::ColPivHouseholderQR<MatrixXd> qr(base);
-      qr.setThreshold(1e-10);
+      qr.setThreshold(detail::kRankThreshold);
       Index col = base_p;
       for (const Effect* e : effects) {
         const Index k = Index(e->parameter_names(robot).size());
@@ -819,132 +856,225 @@ MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
       }
     }
     return a;
-  };
-  auto rows_of_chosen = [&](const std::vector<Index>& idx) {
-    MatrixXd Ad(Index(idx.size()) * r, p);
-    for (std::size_t k = 0; k < idx.size(); ++k) Ad.middleRows(Index(k) * r, r) = A.middleRows(idx[k] * r, r);
-    return Ad;
-  };
-  plan.planned = assess("planned", rows_of_chosen(chosen));
-  if (plan.planned.rank < p) {
-    const std::string unseen = std::to_string(p - plan.planned.rank) + " combination" +
-                               (p - plan.planned.rank > 1 ? "s" : "") + " of the parameters";
-    const std::size_t targets = robot.targets.size();
-    if (design.measure().find("target position") != std::string::npos && targets < 3)
-      plan.notes.push_back(unseen + " no pose can show: " +
-                           (targets == 1 ? std::string("one target's position does not measure the orientation")
-                                         : std::string("two targets do not measure the rotation about their line")) +
-                           "; they are left to the prior (in the predicted errors). " +
-                           (targets == 1 ? std::string("Two more targets, not in line with it, measure them")
-                                         : std::string("A third target off that line measures them")));
-    else
-      plan.notes.push_back(unseen + " stay unseen by the planned poses; they are left to the prior (in the "
-                                    "predicted errors). More poses, or candidates that move in more ways, may "
-                                    "show them");
   }
+};
+
+// What a user lays out by hand, to compare with: positions on a lattice over
+// the box the axes reach, at the home orientation (6-UPS: 3 layers, each pose
+// tilted at random within ±5° as examples/seed001/grid_poses.csv; hybrid:
+// one layer of pure translations as seed 000's), shrunk until every node is
+// usable; its assessment and poses go into the plan (or a note that none
+// was found).
+void compare_with_hand_grid(const Robot& robot, const PlanOptions& o, const Workspace& workspace,
+                            const Vec6<double>& home, const Reach& reach, bool backlash, const DesignRows& design,
+                            const std::vector<const Effect*>& effects, const DesignAssessor& assess,
+                            std::mt19937_64& rng, MeasurementPlan& plan) {
+  const HandGrid habit = family_of(robot).measurement().hand_grid();
+  const int layers = habit.layers;
+  const std::size_t per_layer = (o.count + std::size_t(layers) - 1) / std::size_t(layers);
+  const int nx = int(std::ceil(std::sqrt(double(per_layer))));
+  const int ny = int((per_layer + std::size_t(nx) - 1) / std::size_t(nx));
+  std::uniform_real_distribution<double> tilt(-5 * pi<double>() / 180, 5 * pi<double>() / 180);
+  std::vector<Candidate> grid;
+  double f = 0.9;
+  for (int attempt = 0; attempt < 40 && grid.size() < o.count; ++attempt, f *= 0.9) {
+    grid.clear();
+    std::vector<Vec6<double>> lattice;
+    auto at = [&](int i, int n, int d) {
+      return n == 1 ? home(d) : home(d) + f * (reach.lo(d) + (reach.hi(d) - reach.lo(d)) * double(i) / double(n - 1));
+    };
+    for (int l = 0; l < layers; ++l)
+      for (int iy = 0; iy < ny; ++iy)
+        for (int ix = 0; ix < nx; ++ix) {
+          Vec6<double> x = home;
+          x(0) = at(ix, nx, 0);
+          x(1) = at(iy, ny, 1);
+          x(2) = at(l, layers, 2);
+          lattice.push_back(x);
+        }
+    bool all_usable = true;
+    for (std::size_t k = 0; k < o.count && all_usable; ++k) {
+      Candidate c;
+      c.xyzrpy = lattice[k * lattice.size() / o.count];
+      if (habit.tilted)
+        for (int d = 3; d < 6; ++d) c.xyzrpy(d) += tilt(rng);
+      all_usable = workspace.usable(c.xyzrpy, c.q);
+      if (backlash) c.dir = random_directions(rng);
+      grid.push_back(c);
+    }
+    if (!all_usable) grid.clear();
+  }
+  if (grid.size() == o.count) {
+    MatrixXd Ag, Pg;
+    candidate_rows(robot, design, effects, backlash, grid, Ag, Pg);
+    if (grid.size() == o.count) plan.grid_assessment = assess("grid", Ag);
+    plan.grid.has_role = true;
+    plan.grid.has_dir = backlash;
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      PoseRow row;
+      row.id = "G" + std::to_string(k + 1);
+      row.commanded = grid[k].xyzrpy;
+      if (backlash) row.dir = grid[k].dir;
+      plan.grid.rows.push_back(row);
+    }
+  } else {
+    plan.notes.push_back("no grid of " + std::to_string(o.count) + " usable poses was found to compare with");
+  }
+}
+
+// The options a plan cannot start without.
+void check_options(const PlanOptions& o) {
+  if (!(o.noise_mm > 0) || !std::isfinite(o.noise_mm)) throw InputError("", 0, 0, "the noise level must be positive");
+  if (!(o.margin >= 0 && o.margin < 0.5)) throw InputError("", 0, 0, "the margin must lie in [0, 0.5)");
+  if (!(o.prior_mm > 0)) throw InputError("", 0, 0, "the prior must be positive");
+  // Each candidate keeps its design rows (a few KiB): a million is ~10 GiB.
+  if (o.sample_count > 200000) throw InputError("", 0, 0, "at most 200000 sampled candidates (--samples)");
+}
+
+// Enough measured coordinates for the parameters, and enough usable
+// candidates for the poses asked: otherwise a one-line error saying what to
+// change (the first refused candidate named).
+template <class Progress>
+void require_enough_poses(const Robot& robot, const PlanOptions& o, Index p, Index r, std::size_t usable,
+                          const std::string& first_rejected, MeasurementPlan& plan, const Progress& progress) {
+  if (Index(o.count) * r < p) {
+    const Index need = (p + r - 1) / r;
+    throw InputError("", 0, 0,
+                     std::to_string(o.count) + " poses give " + std::to_string(Index(o.count) * r) +
+                         " measured coordinates for " + std::to_string(p) + " parameters; plan at least " +
+                         std::to_string(need) + " poses (more than that to see the noise)");
+  }
+  progress(std::to_string(usable) + " usable candidate poses of " + std::to_string(plan.candidates));
+  plan.usable_candidates = usable;
+  if (usable < o.count + o.test_count)
+    throw InputError(o.candidates.rows.empty() ? robot.name : o.candidates.file, 0, 0,
+                     std::to_string(usable) + " of " + std::to_string(plan.candidates) +
+                         " candidate poses are usable (reachable inside the limits with a margin of " +
+                         fixed(100 * o.margin, 1) + " %, away from singularities), fewer than the " +
+                         std::to_string(o.count + o.test_count) + " asked for" +
+                         (first_rejected.empty() ? std::string() : "; first rejected: " + first_rejected));
+
+}
+
+// n indices spread evenly over 0..size − 1 (all of them when size ≤ n).
+std::vector<Index> even_sample(std::size_t size, std::size_t n) {
+  std::vector<Index> out;
+  n = std::min(size, n);
+  for (std::size_t k = 0; k < n; ++k) out.push_back(Index(k * size / n));
+  return out;
+}
+
+// `count` pool poses drawn at random (the random design compared with).
+std::vector<Index> random_poses(std::size_t pool_size, std::size_t count, std::mt19937_64& rng) {
+  std::vector<Index> all(pool_size);
+  std::iota(all.begin(), all.end(), 0);
+  std::shuffle(all.begin(), all.end(), rng);
+  all.resize(count);
+  return all;
+}
+
+// The rows (r per pose) of poses `idx` of a stacked matrix.
+MatrixXd pose_rows(const MatrixXd& stacked, const std::vector<Index>& idx, Index r) {
+  MatrixXd out(Index(idx.size()) * r, stacked.cols());
+  for (std::size_t k = 0; k < idx.size(); ++k) out.middleRows(Index(k) * r, r) = stacked.middleRows(idx[k] * r, r);
+  return out;
+}
+
+// Combinations of parameters the planned poses leave unseen: why (one or two
+// targets cannot show a rotation) and what would show them.
+void note_unseen_combinations(const Robot& robot, const DesignRows& design, Index unseen_count,
+                              std::vector<std::string>& notes) {
+  const std::string unseen = std::to_string(unseen_count) + " combination" +
+                             (unseen_count > 1 ? "s" : "") + " of the parameters";
+  const std::size_t targets = robot.targets.size();
+  if (design.measure().find("target position") != std::string::npos && targets < 3)
+    notes.push_back(unseen + " no pose can show: " +
+                         (targets == 1 ? std::string("one target's position does not measure the orientation")
+                                       : std::string("two targets do not measure the rotation about their line")) +
+                         "; they are left to the prior (in the predicted errors). " +
+                         (targets == 1 ? std::string("Two more targets, not in line with it, measure them")
+                                       : std::string("A third target off that line measures them")));
+  else
+    notes.push_back(unseen + " stay unseen by the planned poses; they are left to the prior (in the "
+                                  "predicted errors). More poses, or candidates that move in more ways, may "
+                                  "show them");
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- the plan
+
+// The plan as its steps: the effects in the criterion, the candidate poses,
+// their design rows, the prior, the D-optimal choice, the evaluation poses,
+// the planned design's numbers against random and hand-grid ones, and the
+// poses in motion order. The steps draw from one random stream, in this
+// order: the candidates and their approach directions, the random design,
+// the grid's tilts and directions — so a seed gives the same plan.
+MeasurementPlan plan_measurements(const Robot& robot, const PlanOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  auto progress = [&](const std::string& s) {
+    if (o.progress) o.progress(s);
+  };
+  MeasurementPlan plan;
+  check_options(o);
+  const PlannedEffects planned = planned_effects(robot, o, plan);
+  const std::vector<const Effect*>& effects = planned.effects;
+  const bool backlash = planned.backlash;
+
+  DesignRows design(robot, o, plan.notes);
+  plan.rows_per_pose = std::size_t(design.rows_per_pose());
+  plan.measure = design.measure();
+  const Workspace workspace(robot, o);
+  std::mt19937_64 rng(o.seed);
+
+  const Vec6<double> home = robot.home_pose().to_xyz_rpy();
+  const Reach reach = axis_reach(robot, workspace, home);
+  std::string first_rejected;
+  std::vector<Candidate> pool = candidate_pool(o, workspace, home, reach, backlash, rng, plan, first_rejected);
+
+  for (const Effect* e : effects) design.add_effect(e);
+  const Index r = design.rows_per_pose();
+
+  MatrixXd A, P;
+  candidate_rows(robot, design, effects, backlash, pool, A, P);
+  keep_identifiable_columns(design, pool.size(), A, P);
+  const Index p = design.parameters();
+
+  plan.parameter_names = design.names();
+  require_enough_poses(robot, o, p, r, pool.size(), first_rejected, plan, progress);
+
+  // The prior: parameter j moves the measured points by prior_mm RMS over
+  // the pool. Scaling each column by its prior standard deviation τ_j makes
+  // the prior precision the identity.
+  const VectorXd tau = prior_scale(design, A, pool.size(), o.prior_mm);
+  const MatrixXd As = A * tau.asDiagonal();
+
+  // The poses: D-optimal on the prior-scaled rows.
+  const std::vector<Index> chosen = choose_poses(As, r, o, pool.size(), plan, progress);
+  std::vector<bool> in(pool.size(), false);
+  for (Index c : chosen) in[std::size_t(c)] = true;
+
+  // Evaluation poses for the predicted held-out error: the held-out poses
+  // chosen after the plan (--test), or an even sample of the pool.
+  const std::vector<Index> test =
+      o.test_count > 0 ? held_out_poses(pool, home, reach, o.test_count, in) : std::vector<Index>();
+  const std::vector<Index> evaluation = o.test_count > 0 ? test : even_sample(pool.size(), 300);
+  plan.evaluation_poses = evaluation.size();
+  const MatrixXd Pes = pose_rows(P, evaluation, 3) * tau.asDiagonal();
+
+  // The numbers of a design (its whitened rows A_d).
+  const DesignAssessor assess{robot, design, effects, tau, Pes, evaluation.size()};
+  plan.planned = assess("planned", pose_rows(A, chosen, r));
+  if (plan.planned.rank < p) note_unseen_combinations(robot, design, p - plan.planned.rank, plan.notes);
 
   // Random: as many pool poses drawn at random (the same seed).
-  if (o.compare) {
-    std::vector<Index> all(pool.size());
-    std::iota(all.begin(), all.end(), 0);
-    std::shuffle(all.begin(), all.end(), rng);
-    all.resize(o.count);
-    plan.random_assessment = assess("random", rows_of_chosen(all));
-  }
+  if (o.compare) plan.random_assessment = assess("random", pose_rows(A, random_poses(pool.size(), o.count, rng), r));
 
-  // Grid: what a user lays out by hand — positions on a lattice over the
-  // box the axes reach, at the home orientation (6-UPS: 3 layers, each pose
-  // tilted at random within ±5° as examples/seed001/grid_poses.csv; hybrid:
-  // one layer of pure translations as seed 000's), shrunk until every node
-  // is usable.
-  if (o.compare) {
-    const HandGrid habit = family_of(robot).measurement().hand_grid();
-    const int layers = habit.layers;
-    const std::size_t per_layer = (o.count + std::size_t(layers) - 1) / std::size_t(layers);
-    const int nx = int(std::ceil(std::sqrt(double(per_layer))));
-    const int ny = int((per_layer + std::size_t(nx) - 1) / std::size_t(nx));
-    std::uniform_real_distribution<double> tilt(-5 * pi<double>() / 180, 5 * pi<double>() / 180);
-    std::vector<Candidate> grid;
-    double f = 0.9;
-    for (int attempt = 0; attempt < 40 && grid.size() < o.count; ++attempt, f *= 0.9) {
-      grid.clear();
-      std::vector<Vec6<double>> lattice;
-      auto at = [&](int i, int n, int d) {
-        return n == 1 ? home(d) : home(d) + f * (reach_lo(d) + (reach_hi(d) - reach_lo(d)) * double(i) / double(n - 1));
-      };
-      for (int l = 0; l < layers; ++l)
-        for (int iy = 0; iy < ny; ++iy)
-          for (int ix = 0; ix < nx; ++ix) {
-            Vec6<double> x = home;
-            x(0) = at(ix, nx, 0);
-            x(1) = at(iy, ny, 1);
-            x(2) = at(l, layers, 2);
-            lattice.push_back(x);
-          }
-      bool all_usable = true;
-      for (std::size_t k = 0; k < o.count && all_usable; ++k) {
-        Candidate c;
-        c.xyzrpy = lattice[k * lattice.size() / o.count];
-        if (habit.tilted)
-          for (int d = 3; d < 6; ++d) c.xyzrpy(d) += tilt(rng);
-        all_usable = workspace.usable(c.xyzrpy, c.q);
-        if (backlash) c.dir = random_dir();
-        grid.push_back(c);
-      }
-      if (!all_usable) grid.clear();
-    }
-    if (grid.size() == o.count) {
-      MatrixXd Ag, Pg;
-      rows_of(grid, Ag, Pg);
-      if (grid.size() == o.count) plan.grid_assessment = assess("grid", Ag);
-      plan.grid.has_role = true;
-      plan.grid.has_dir = backlash;
-      for (std::size_t k = 0; k < grid.size(); ++k) {
-        PoseRow row;
-        row.id = "G" + std::to_string(k + 1);
-        row.commanded = grid[k].xyzrpy;
-        if (backlash) row.dir = grid[k].dir;
-        plan.grid.rows.push_back(row);
-      }
-    } else {
-      plan.notes.push_back("no grid of " + std::to_string(o.count) + " usable poses was found to compare with");
-    }
-  }
+  // Grid: what a user lays out by hand.
+  if (o.compare) compare_with_hand_grid(robot, o, workspace, home, reach, backlash, design, effects, assess, rng, plan);
 
-  // The plan's poses (cal and test together) in motion order.
-  {
-    std::vector<Index> rows = chosen;
-    rows.insert(rows.end(), test.begin(), test.end());
-    std::vector<Vec6<double>> q;
-    for (Index c : rows) q.push_back(pool[std::size_t(c)].q);
-    Vec6<double> range = workspace.range();
-    for (int i = 0; i < 6; ++i)
-      if (!(range(i) > 0)) {  // no limit: the span of the candidates
-        double lo = q.front()(i), hi = lo;
-        for (const Candidate& c : pool) {
-          lo = std::min(lo, c.q(i));
-          hi = std::max(hi, c.q(i));
-        }
-        range(i) = std::max(hi - lo, 1e-9);
-      }
-    Vec6<double> q_home;
-    if (robot.inverse(robot.home_pose(), q_home) != Status::Ok) q_home = q.front();
-    const std::vector<std::size_t> order = motion_order(q, q_home, range, plan.path_length);
-    plan.poses.has_role = true;
-    plan.poses.has_dir = backlash;
-    std::size_t cal = 0, held = 0;
-    for (std::size_t k : order) {
-      const Candidate& c = pool[std::size_t(rows[k])];
-      PoseRow row;
-      const bool is_test = k >= chosen.size();
-      row.role = is_test ? Role::Test : Role::Cal;
-      const std::string n = std::to_string(is_test ? ++held : ++cal);
-      row.id = !c.id.empty() ? c.id : (is_test ? "T" : "P") + std::string(n.size() < 3 ? 3 - n.size() : 0, '0') + n;
-      row.commanded = c.xyzrpy;
-      if (backlash) row.dir = c.dir;
-      plan.poses.rows.push_back(row);
-    }
-  }
+  // The plan's poses, cal and test together, in the order to measure them.
+  motion_ordered_poses(robot, workspace, pool, chosen, test, backlash, plan);
   plan.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return plan;
 }

@@ -11,8 +11,9 @@
 // Each predicts what it measures at a pose and maps a pose error twist
 // (v at the pose's origin, ω; base axes, core/pose.hpp) to the change of
 // that measurement, Δy = M·$, so a design is H = M·B (seed 000 Eq. (10))
-// here for every instrument. (The hybrid pipeline's per-node loops call the
-// gauge's fixed-size gauge_map directly, the same kernel.)
+// here for every instrument, the hybrid pipeline's per-node loops included
+// (design_into: the gauge's rows from its fixed-size 9 × 6 kernel, written
+// into the caller's stacked design without an allocation).
 #pragma once
 
 #include <string>
@@ -49,6 +50,20 @@ class MeasurementModel {
   Eigen::MatrixXd map(const Pose<double>& pose) const;
   // H = M·T for the twist columns T (6 × n) of some parameters at `pose`.
   Eigen::MatrixXd design(const Pose<double>& pose, const Eigen::Ref<const Eigen::MatrixXd>& T) const;
+  // The same H written into the caller's rows() × n block (a node's rows of
+  // a stacked design), with no temporary for the gauge and the full pose: the
+  // gauge's fixed-size 9 × 6 map (seed 000 Eq. (9), gauge_map) times T, the
+  // product the hybrid's per-node loops wrote by hand before (the same
+  // Eigen product, so the same rounding).
+  void design_into(const Pose<double>& pose, const Eigen::Ref<const Eigen::MatrixXd>& T,
+                   Eigen::Ref<Eigen::MatrixXd> H) const;
+  // The whitened design W·H = (W·M)·T, W = diag(row_weights) (1/σ of each
+  // measured coordinate), into the caller's block: the planner's rows.
+  void design_into(const Pose<double>& pose, const Eigen::Ref<const Eigen::MatrixXd>& T,
+                   const Eigen::Ref<const Eigen::VectorXd>& row_weights, Eigen::Ref<Eigen::MatrixXd> H) const;
+  // M alone into the caller's rows() × 6 block, where a twist is read back
+  // from a measurement (the hybrid's residual twist) or M itself is kept.
+  void map_into(const Pose<double>& pose, Eigen::Ref<Eigen::MatrixXd> M) const;
 
  private:
   enum class Kind { FullPose, Targets, Gauge };

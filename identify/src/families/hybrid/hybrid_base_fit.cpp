@@ -26,7 +26,8 @@ using Eigen::VectorXd;
 HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
                              const std::vector<std::optional<EffectNode>>& en,
                              std::optional<EstimatorKind> estimator, bool finish, double ridge_k)
-    : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())), ridge_(estimator == EstimatorKind::Ridge),
+    : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())),
+      gauge_(MeasurementModel::gauge(g0_, robot.gauge_radius)), ridge_(estimator == EstimatorKind::Ridge),
       finish_(finish) {
   fine_ = ridge_                                      ? EstimatorKind::Ridge
           : estimator == EstimatorKind::Ols || finish ? EstimatorKind::Ols
@@ -209,12 +210,16 @@ BaseModel HybridBaseFit::evaluate(const PoseTable& data, bool with_joint_map) co
     n.row = k;
     n.test = row.role == Role::Test;
     n.r = gauge_residual(row, predicted);
-    const Eigen::Matrix<double, 9, 6> M = gauge_map(g0_, robot_->gauge_radius, predicted);
+    Eigen::Matrix<double, 9, 6> M;
+    gauge_.map_into(predicted, M);
     n.M = M;
     for (Index j = 0; j < p_; ++j) B_kept.col(j) = B.col(cal_.kept[std::size_t(j)]);
-    // One product of known inner size (9 × 6 by 6 × p), not a matrix–vector
-    // product per kept column nor a general GEMM call.
-    n.H.noalias() = M.lazyProduct(B_kept);
+    // H = M·B_kept through the measurement model like every other design
+    // (its product rounds a last bit differently from the coefficient-based
+    // one this loop used before: the hybrid's printed results moved by
+    // ~1e-12 relative when it changed, docs/architecture.md).
+    n.H.resize(9, p_);
+    gauge_.design_into(predicted, B_kept, n.H);
     n.effect = *(*en_)[k];
     n.joint_map = joint_map;
     base.nodes.push_back(std::move(n));

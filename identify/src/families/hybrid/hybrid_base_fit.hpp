@@ -14,6 +14,7 @@
 #include "effects/base_fit.hpp"
 #include "kincal/core/hybrid_error_twist.hpp"
 #include "kincal/identify/hybrid_calibration.hpp"
+#include "kincal/identify/measurement_model.hpp"
 
 namespace kincal::identify::detail {
 
@@ -76,6 +77,7 @@ class HybridBaseFit final : public SteppedBaseFit {
   const Robot* robot_;
   const std::vector<std::optional<EffectNode>>* en_;
   HybridGeometry<double> g0_;
+  MeasurementModel gauge_;  // seed 000's gauge on g0_: every node's M and H = M·B
   bool ridge_, finish_;
   EstimatorKind fine_ = EstimatorKind::Ols;
   HybridCalibration cal_;

@@ -186,6 +186,9 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   const double radius = nominal.gauge_radius;
   require_gauge_triangles(data, radius);
+  // What the gauge measures (seed 000 Eq. (9)); every design row below is
+  // its M·B.
+  const MeasurementModel gauge = MeasurementModel::gauge(g0, radius);
   const std::vector<Node> nodes = gauge_nodes(g0, data, [](const PoseRow& row) { return row.role == Role::Cal; });
   const Index N = static_cast<Index>(nodes.size());
   // The fine stage identifies up to ~54 source errors (seed 000 Sec. 4.1; 48
@@ -236,7 +239,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     if (st != Status::Ok)
       throw InputError(data.file, n.line, 0,
                        "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
-    Hxi.middleRows(9 * k, 9) = gauge_map(g0, radius, n.commanded) * B.leftCols(6);
+    gauge.design_into(n.commanded, B.leftCols(6), Hxi.middleRows(9 * k, 9));
   }
   const Eigen::ColPivHouseholderQR<MatrixXd> qr(Hxi);
   if (qr.rank() < 6)
@@ -283,7 +286,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
     if (st != Status::Ok)
       throw InputError(data.file, 0, 0,
                        "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
-    H.middleRows(9 * k, 9).noalias() = gauge_map(g0, radius, tool) * B;
+    gauge.design_into(tool, B, H.middleRows(9 * k, 9));
   }
   std::vector<std::string> names;
   names.reserve(params.size());
@@ -434,7 +437,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
       res.segment<9>(9 * k) = n.measured - targets9(g0, radius, reached);
       if (Hfull) {
         if (model.error_jacobian(reached, B) != Status::Ok) return false;
-        Hfull->middleRows(9 * k, 9).noalias() = gauge_map(g0, radius, reached) * B;
+        gauge.design_into(reached, B, Hfull->middleRows(9 * k, 9));
       }
     }
     return res.allFinite();
@@ -548,12 +551,13 @@ IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const Hybr
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
   const double radius = nominal.gauge_radius;
   const HybridErrorModel model(g0);
+  const MeasurementModel gauge = MeasurementModel::gauge(g0, radius);
   // The fine stage's rows at a pose: gauge map × B (Eq. (9)), all 150 columns.
   const PoseDesignRows rows = [&](const Eigen::Matrix<double, 6, 1>& p) -> MatrixXd {
     const Pose<double> pose = Pose<double>::from_xyz_rpy(p);
     MatrixXd B(6, HybridErrorModel::kParameterCount);
     if (model.error_jacobian(pose, B) != Status::Ok) return {};
-    return gauge_map(g0, radius, pose) * B;
+    return gauge.design(pose, B);
   };
   MatrixXd H(9 * static_cast<Index>(cal.fine_poses.size()), HybridErrorModel::kParameterCount);
   Index at = 0;
@@ -777,6 +781,7 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     chains = compensation->chains();
   else
     hybrid_exact_chains(g0, HybridErrorModelOptions().up_split, static_cast<const double*>(nullptr), chains);
+  const MeasurementModel gauge = MeasurementModel::gauge(g0, nominal.gauge_radius);
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;
   std::vector<UnevaluatedRow> unevaluated;
@@ -803,7 +808,10 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     Eigen::Matrix<double, 9, 1> measured;
     for (int k = 0; k < 9; ++k) measured(k) = row.targets->data()[k];
     const Eigen::Matrix<double, 9, 1> dp = measured - targets9(g0, nominal.gauge_radius, predicted);
-    const Eigen::Matrix<double, 9, 6> P = gauge_map(g0, nominal.gauge_radius, predicted);
+    // The residual twist read back from the targets' displacements: the
+    // least-squares solution of M·$ = Δp (Eq. (9)'s map at the modelled pose).
+    Eigen::Matrix<double, 9, 6> P;
+    gauge.map_into(predicted, P);
     PoseErrorRow r;
     r.id = row.id;
     r.group = data.has_layer && row.layer ? "layer " + std::to_string(*row.layer) : std::string();
