@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/identify.hpp"
 #include "kincal/identify/input_error.hpp"
 #include "kincal/identify/parameters.hpp"
@@ -95,6 +96,27 @@ TEST(IdentifyPipeline, AFamilyWithoutItsOwnPipelineAsksForTargetsAndOptionsAreCh
   EXPECT_THROW(ki::check_identify_options(ki::builtin_robot("stewart-seed001"), liu), ki::InputError);
   EXPECT_NO_THROW(ki::check_identify_options(ki::builtin_robot("hybrid-seed000"), liu));
   EXPECT_NO_THROW(ki::check_identify_options(rus6, liu));
+}
+
+TEST(IdentifyPipeline, WithEffectsTheTargetFitsDataRefuseTheHybridsRidgeBase) {
+  // The ridge base is the hybrid's own pipeline's (toward its coarse
+  // machine). Tracker targets, here in the tracker's frame, go to the
+  // target fit whatever the family: its base is OLS, and asking for the
+  // ridge is refused before any fit (it used to be accepted, then ignored).
+  const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
+  ki::PoseTable tracker;
+  tracker.file = "tracker.csv";
+  tracker.has_targets = true;
+  tracker.target_count = 1;
+  tracker.in_instrument_frame = true;
+  ki::EffectCalibrationOptions ridge;
+  ridge.estimator = ki::EstimatorKind::Ridge;
+  try {
+    (void)ki::calibrate_with_effects(hybrid, tracker, {"compliance"}, ridge);
+    ADD_FAILURE() << "the ridge base was accepted on tracker data";
+  } catch (const ki::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ols (the target fit's Gauss-Newton)"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
