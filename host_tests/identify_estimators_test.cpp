@@ -12,6 +12,7 @@
 #include <string>
 
 #include "../identify/src/estimate/least_squares_step.hpp"
+#include "../identify/src/estimate/scaled_design.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/estimators.hpp"
 #include "kincal/identify/input_error.hpp"
@@ -670,6 +671,52 @@ TEST(identifyEstimators, MeanLeverageIsThePredictionVarianceOfHeldOutRows) {
     EXPECT_NEAR(ls.mean_leverage(Xt), monte_carlo, 0.05 * monte_carlo) << "trial " << trial;
     EXPECT_GT(ls.mean_leverage(Xt), double(ls.rank()) / double(n));  // extrapolated rows weigh more
   }
+}
+
+// ScaledDesign (the one rank rule and the statistics of the joint effect fit
+// and the target fit) against an independent computation: columns divided
+// by their norms by hand, the normal matrix's inverse for the variances at
+// full rank, JacobiSVD for the condition number, and a null vector built
+// by construction for the rank-deficient design; a zero column scaled by 1.
+TEST(identifyEstimators, ScaledDesignAgreesWithAnIndependentFactorisation) {
+  std::mt19937_64 rng(53);
+  const Index n = 45, p = 7;
+  const MatrixXd X = columns_in_units_apart(design_with_spectrum(n, p, 1.0, 1e3, rng));
+  MatrixXd S = X;
+  for (Index j = 0; j < p; ++j) S.col(j) /= X.col(j).norm();
+  const kincal::identify::detail::ScaledDesign full(X);
+  EXPECT_EQ(full.rank(), p);
+  const Eigen::JacobiSVD<MatrixXd> check(S);
+  const VectorXd sv = check.singularValues();
+  EXPECT_NEAR(full.condition_number(), sv(0) / sv(p - 1), 1e-8 * sv(0) / sv(p - 1));
+  const MatrixXd inverse_normal = (S.transpose() * S).inverse();
+  for (Index j = 0; j < p; ++j) {
+    EXPECT_NEAR(full.scaled_variance(j), inverse_normal(j, j), 1e-8 * inverse_normal(j, j)) << "column " << j;
+    EXPECT_LT(full.outside_rank(j), 1e-20) << "column " << j;
+    EXPECT_NEAR(full.scale()(j), X.col(j).norm(), 1e-12 * X.col(j).norm());
+  }
+  // Column 5 a combination of 1 and 3 (in their own units): the scaled null
+  // vector z has z_5 = −1 and the combination's scaled coefficients.
+  MatrixXd Y = X;
+  Y.col(5) = 3.0 * X.col(1) - 0.25 * X.col(3);
+  const kincal::identify::detail::ScaledDesign deficient(Y);
+  EXPECT_EQ(deficient.rank(), p - 1);
+  VectorXd z = VectorXd::Zero(p);
+  const double d5 = Y.col(5).norm();
+  z(1) = 3.0 * X.col(1).norm() / d5;
+  z(3) = -0.25 * X.col(3).norm() / d5;
+  z(5) = -1.0;
+  z.normalize();
+  for (Index j = 0; j < p; ++j)
+    EXPECT_NEAR(deficient.outside_rank(j), z(j) * z(j), 1e-9) << "column " << j;
+  // A zero column: scale 1, not determined, the rank one less.
+  MatrixXd Z = X;
+  Z.col(2).setZero();
+  const kincal::identify::detail::ScaledDesign with_zero(Z);
+  EXPECT_EQ(with_zero.scale()(2), 1.0);
+  EXPECT_EQ(with_zero.rank(), p - 1);
+  EXPECT_NEAR(with_zero.outside_rank(2), 1.0, 1e-12);
+  EXPECT_TRUE(std::isinf(with_zero.condition_number()) || with_zero.condition_number() > 1e15);
 }
 
 // The damped descent's steps (DescentStep: corrected semi-normal equations)
