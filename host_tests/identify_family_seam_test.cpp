@@ -329,6 +329,27 @@ TEST_P(FamilySeam, EffectColumnsAreTheDerivativeOfCoresCorrectionOnTheFamilysPos
   EXPECT_GT(checked, 3 * 20);  // scale, backlash, compliance (6 each), cyclic, wobble's 3, per pose
 }
 
+// The allocation-free forms the per-node loops use (design_into, map_into,
+// the planner's row-weighted design) write what map() and M·T give, into a
+// block of a larger stacked design, and nothing outside it.
+void check_into_blocks(const ki::MeasurementModel& m, const Pose<double>& pose, const Eigen::MatrixXd& T) {
+  const Eigen::MatrixXd M = m.map(pose);
+  const Eigen::Index r = m.rows();
+  Eigen::MatrixXd stacked = Eigen::MatrixXd::Constant(3 * r, T.cols(), 7.0);
+  m.design_into(pose, T, stacked.middleRows(r, r));
+  EXPECT_LT((stacked.middleRows(r, r) - M * T).norm(), 1e-12 * (M * T).norm()) << m.describe();
+  EXPECT_TRUE((stacked.topRows(r).array() == 7.0).all()) << m.describe();
+  EXPECT_TRUE((stacked.bottomRows(r).array() == 7.0).all()) << m.describe();
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(r, 0.5, 2.0);
+  Eigen::MatrixXd weighted(r, T.cols());
+  m.design_into(pose, T, w, weighted);
+  EXPECT_LT((weighted - w.asDiagonal() * M * T).norm(), 1e-12 * (M * T).norm()) << m.describe();
+  Eigen::MatrixXd M_block = Eigen::MatrixXd::Zero(r + 2, 6);
+  m.map_into(pose, M_block.bottomRows(r));
+  EXPECT_EQ(M_block.bottomRows(r), M) << m.describe();
+  EXPECT_TRUE(M_block.topRows(2).isZero()) << m.describe();
+}
+
 TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
   const ki::Robot hybrid = ki::builtin_robot("hybrid-seed000");
   const Pose<double> registration = Pose<double>::from_xyz_rpy(1500, -200, 300, 0.1, -0.2, 2.1);
@@ -355,10 +376,12 @@ TEST(MeasurementModel, MapsMatchFiniteDifferencesOfThePrediction) {
     }
     const Eigen::MatrixXd T = Eigen::MatrixXd::Random(6, 4);
     EXPECT_LT((m.design(pose, T) - M * T).norm(), 1e-12 * (M * T).norm());
+    check_into_blocks(m, pose, T);
   }
   const ki::MeasurementModel full = ki::MeasurementModel::full_pose();
   EXPECT_TRUE(full.measures_orientation());
   EXPECT_EQ(full.map(pose), Eigen::MatrixXd::Identity(6, 6));
+  check_into_blocks(full, pose, Eigen::MatrixXd::Random(6, 3));
 }
 
 INSTANTIATE_TEST_SUITE_P(RegisteredFamilies, FamilySeam,
