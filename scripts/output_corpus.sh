@@ -10,18 +10,48 @@
 #   scripts/output_corpus.sh build/host/apps/kincal /tmp/before   # before the change
 #   scripts/output_corpus.sh build/host/apps/kincal /tmp/after    # after it
 #   scripts/output_corpus.sh --compare /tmp/before /tmp/after      # no output: identical
+#   scripts/output_corpus.sh --compare-numbers /tmp/before /tmp/after
+#
+# --compare-numbers is for a change that may move the last digits (a product
+# rounded another way): per differing file, "same words" and the largest
+# relative difference of its numbers, or "words differ" where anything but a
+# number changed (a count, a name, a verdict, a line more or fewer). Needs
+# python3.
 #
 # Timings ("diagnosis in … s", "seconds") and the folder's own name are left
 # out of the comparison. About 15 s.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+strip() {  # file dir: the file with the corpus folder's name and timings taken out
+  sed -E -e "s|$2|CORPUS|g" -e 's/diagnosis in [0-9.e+-]+ s/diagnosis in T s/' -e 's/"seconds": [0-9.e+-]+/"seconds": T/' \
+    -e 's/swaps\), [0-9.]+ s/swaps), T s/' "$1"
+}
+
+if [ "${1:-}" = "--compare-numbers" ]; then
+  [ $# -eq 3 ] || { echo "usage: $0 --compare-numbers BEFORE AFTER" >&2; exit 2; }
+  status=0
+  for f in "$2"/*; do
+    name=$(basename "$f")
+    [ -e "$3/$name" ] || { echo "only in $2: $name"; status=1; continue; }
+    diff -q <(strip "$f" "$2") <(strip "$3/$name" "$3") > /dev/null && continue
+    python3 - <(strip "$f" "$2") <(strip "$3/$name" "$3") "$name" <<'PY' || status=1
+import re, sys
+number = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+a, b = open(sys.argv[1]).read(), open(sys.argv[2]).read()
+if number.split(a) != number.split(b):
+    print(f"{sys.argv[3]}: words differ")
+    sys.exit(1)
+worst = max(abs(float(x) - float(y)) / max(abs(float(x)), abs(float(y)), 1e-300)
+            for x, y in zip(number.findall(a), number.findall(b)))
+print(f"{sys.argv[3]}: same words, numbers within {worst:.1e} relative")
+PY
+  done
+  exit $status
+fi
+
 if [ "${1:-}" = "--compare" ]; then
   [ $# -eq 3 ] || { echo "usage: $0 --compare BEFORE AFTER" >&2; exit 2; }
-  strip() {  # file dir: the file with the corpus folder's name and timings taken out
-    sed -E -e "s|$2|CORPUS|g" -e 's/diagnosis in [0-9.e+-]+ s/diagnosis in T s/' -e 's/"seconds": [0-9.e+-]+/"seconds": T/' \
-      -e 's/swaps\), [0-9.]+ s/swaps), T s/' "$1"
-  }
   status=0
   for f in "$2"/*; do
     name=$(basename "$f")
@@ -36,7 +66,7 @@ if [ "${1:-}" = "--compare" ]; then
   exit $status
 fi
 
-[ $# -eq 2 ] || { echo "usage: $0 KINCAL OUT_DIR | $0 --compare BEFORE AFTER" >&2; exit 2; }
+[ $# -eq 2 ] || { echo "usage: $0 KINCAL OUT_DIR | $0 --compare BEFORE AFTER | $0 --compare-numbers BEFORE AFTER" >&2; exit 2; }
 kincal=$1
 out=$2
 rm -rf "$out"
