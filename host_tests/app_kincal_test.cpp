@@ -688,6 +688,15 @@ TEST(appKincal, EffectsListsEveryEffectWithItsParametersAndInputs) {
   EXPECT_TRUE(contains(json.out, "\"a3\"")) << json.out;
   EXPECT_FALSE(contains(json.out, "\"a4\"")) << json.out;
   EXPECT_TRUE(contains(json.out, "dir1..dir6")) << json.out;
+  // The numbers a family offers formulas: the 6-RUS's rod and lever, none
+  // for the others.
+  EXPECT_TRUE(contains(json.out, "\"formula_family_variables\": []")) << json.out;
+  EXPECT_FALSE(contains(text.out, "formula variables this family offers")) << text.out;
+  const ToolRun rus6 = run_tool("effects --robot rus6-ref");
+  ASSERT_EQ(rus6.code, 0) << rus6.err;
+  EXPECT_TRUE(contains(rus6.out, "formula variables this family offers")) << rus6.out;
+  EXPECT_TRUE(contains(rus6.out, "\n  rod: ")) << rus6.out;
+  EXPECT_TRUE(contains(rus6.out, "\n  lever: mm of rod per rad of crank")) << rus6.out;
   const ToolRun bad = run_tool("effects --robot no-such-robot");
   EXPECT_NE(bad.code, 0);
   EXPECT_EQ(lines(bad.err), 1u) << bad.err;

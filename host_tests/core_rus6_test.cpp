@@ -131,7 +131,7 @@ Rus6Geometry<double> make_custom_machine(Vec6<double>* home_commands) {
   g.home.p *= 2.0;
   g.home = Pose<double>::from_xyz_rpy(5.0, -8.0, g.home.p.z(), 2 * kDeg, -1 * kDeg, 3 * kDeg);
   g.characteristic_length = 260.0;
-  Vec6<double> q_home;
+  Vec6<double> q_home = Vec6<double>::Zero();
   for (int i = 0; i < 6; ++i) {
     const Vec3<double> tilt_axis = Vec3<double>(unit(rng), unit(rng), unit(rng)).normalized();
     const Vec3<double> a = (exp_so3(Vec3<double>(tilt_axis * (12 * kDeg * unit(rng)))) * g.shaft_axes.col(i)).normalized();
@@ -151,7 +151,7 @@ Rus6Geometry<double> make_custom_machine(Vec6<double>* home_commands) {
     g.max_joint(i) = q_home(i) + 60 * kDeg;
   }
   g.home_branch.setZero();
-  Vec6<double> branches;
+  Vec6<double> branches = Vec6<double>::Zero();
   if (rus6_home_branches(g, branches) == Status::Ok) g.home_branch = branches;
   if (home_commands != nullptr) *home_commands = q_home;
   return g;
@@ -169,7 +169,7 @@ RoundTripStats round_trip(const Rus6Geometry<double>& gd, double mm, double rad,
   RoundTripStats s;
   for (const auto& off : box_offsets(count, mm, rad, seed)) {
     const Pose<Scalar> target = offset_pose<Scalar>(gd.home, off.data());
-    Vec6<Scalar> q;
+    Vec6<Scalar> q = Vec6<Scalar>::Zero();
     ++s.total;
     if (rus6_ik(g, target, q) != Status::Ok) continue;
     Pose<Scalar> found;
@@ -192,7 +192,7 @@ TEST(CoreRus6, ReferenceMachineIsValidAndHomeHasHorizontalCranks) {
   const Rus6Geometry<double> g = make_rus6_ref<double>();
   ASSERT_TRUE(rus6_valid_geometry(g));
   EXPECT_NEAR(g.home.p.z(), 274.0438, 1e-4);
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   Rus6Legs<double> legs;
   ASSERT_EQ(rus6_ik(g, g.home, q, nullptr, &legs), Status::Ok);
   EXPECT_LT(q.cwiseAbs().maxCoeff(), 1e-12);  // θ = 0: cranks horizontal
@@ -213,7 +213,7 @@ TEST(CoreRus6, WorkspaceBoxReachableInsideLimits) {
   double lowest = 0, highest = 0, smallest_lever = 1e9, other_branch_nearest = 1e9;
   for (const auto& off : box_offsets(5000, kBoxMm, kBoxRad, 1)) {
     const Pose<double> pose = offset_pose<double>(g.home, off.data());
-    Vec6<double> q;
+    Vec6<double> q = Vec6<double>::Zero();
     Rus6Legs<double> legs;
     Mat6<double> J;
     ASSERT_EQ(rus6_ik(g, pose, q, &J, &legs), Status::Ok);
@@ -248,7 +248,7 @@ TEST(CoreRus6, ClosedFormIkAgreesWithRootSearchOnEachLeg) {
     int compared = 0;
     for (const auto& off : box_offsets(300, mm, rad, 7)) {
       const Pose<double> pose = offset_pose<double>(g.home, off.data());
-      Vec6<double> q;
+      Vec6<double> q = Vec6<double>::Zero();
       const Status st = rus6_ik(g, pose, q);
       for (int i = 0; i < 6; ++i) {
         const std::vector<double> roots = closure_roots(g, pose, i);
@@ -298,8 +298,8 @@ TEST(CoreRus6, FloatReferenceMatchesDouble) {
   EXPECT_EQ(gf.home_branch.cast<double>(), gd.home_branch);
   double worst = 0;
   for (const auto& off : box_offsets(500, kBoxMm, kBoxRad, 13)) {
-    Vec6<double> qd;
-    Vec6<float> qf;
+    Vec6<double> qd = Vec6<double>::Zero();
+    Vec6<float> qf = Vec6<float>::Zero();
     ASSERT_EQ(rus6_ik(gd, offset_pose<double>(gd.home, off.data()), qd), Status::Ok);
     ASSERT_EQ(rus6_ik(gf, offset_pose<float>(gd.home, off.data()), qf), Status::Ok);
     worst = std::max(worst, (qf.cast<double>() - qd).cwiseAbs().maxCoeff());
@@ -318,7 +318,7 @@ TEST(CoreRus6, FkFromPreviousPoseTracksAPath) {
     const double off[6] = {30 * std::sin(6.28 * s), 30 * std::cos(6.28 * s) - 30, 20 * s, 8 * kDeg * s, -5 * kDeg * s,
                            7 * kDeg * std::sin(3.14 * s)};
     const Pose<double> target = offset_pose<double>(g.home, off);
-    Vec6<double> q;
+    Vec6<double> q = Vec6<double>::Zero();
     ASSERT_EQ(rus6_ik(g, target, q), Status::Ok);
     Pose<double> found;
     const FkReport<double> r = rus6_fk(g, q, previous, found);
@@ -337,7 +337,7 @@ TEST(CoreRus6, FkFromHomeToGuideBarPose) {
   const Rus6Geometry<double> g = make_rus6_ref<double>();
   const Pose<double> target =
       Pose<double>::from_xyz_rpy(10, 5, g.home.p.z() + 5, 2 * kDeg, 1.5 * kDeg, -3 * kDeg);
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   ASSERT_EQ(rus6_ik(g, target, q), Status::Ok);
   Pose<double> found;
   const FkReport<double> r = rus6_fk(g, q, found);
@@ -358,7 +358,7 @@ TEST(CoreRus6, FkFromHomeOverTheBoxInAtMostFiveStepsToTheIkPose) {
   double error_d = 0, error_f = 0;
   for (const auto& off : box_offsets(300, kBoxMm, kBoxRad, 29)) {
     const Pose<double> target = offset_pose<double>(gd.home, off.data());
-    Vec6<double> qd;
+    Vec6<double> qd = Vec6<double>::Zero();
     ASSERT_EQ(rus6_ik(gd, target, qd), Status::Ok);
     Pose<double> found;
     const FkReport<double> rd = rus6_fk(gd, qd, found);
@@ -389,13 +389,13 @@ template <class Scalar> void check_inverse_jacobian_against_differences(double h
   double worst = 0;
   for (const auto& off : box_offsets(100, kBoxMm, kBoxRad, 21)) {
     const Pose<Scalar> pose = offset_pose<Scalar>(gd.home, off.data());
-    Vec6<Scalar> q;
+    Vec6<Scalar> q = Vec6<Scalar>::Zero();
     Mat6<Scalar> J;
     ASSERT_EQ(rus6_ik(g, pose, q, &J), Status::Ok);
     for (int k = 0; k < 6; ++k) {
       // h in mm for v, in rad (× 1/100 mm) for ω: similar joint changes.
       const Scalar step = Scalar(k < 3 ? h : h / 100);
-      Vec6<Scalar> qp, qm;
+      Vec6<Scalar> qp = Vec6<Scalar>::Zero(), qm = Vec6<Scalar>::Zero();
       ASSERT_EQ(rus6_ik(g, apply_twist(pose, Twist<Scalar>(Twist<Scalar>::Unit(k) * step)), qp), Status::Ok);
       ASSERT_EQ(rus6_ik(g, apply_twist(pose, Twist<Scalar>(Twist<Scalar>::Unit(k) * -step)), qm), Status::Ok);
       const Vec6<double> numeric = ((qp - qm) / (Scalar(2) * step)).template cast<double>();
@@ -415,6 +415,44 @@ TEST(CoreRus6, InverseJacobianMatchesFiniteDifferencesFloat) {
   check_inverse_jacobian_against_differences<float>(0.5, 2e-2);
 }
 
+// The numbers the family offers formulas (rus6_formula_joint_values):
+// `rod` is the geometry's rod, and `lever` is what the IK says a rod's
+// length is worth in crank angle — central differences of the closed-form
+// IK in each rod's length (another route: no lever is computed there), at
+// the box's corners and random poses, on both machines. A rod longer by δ
+// is commanded δ/λ less: dq_i/dℓ_i = −1/λ_i.
+TEST(CoreRus6, FormulaLeverIsTheIksSensitivityToTheRod) {
+  for (int machine = 0; machine < 2; ++machine) {
+    const Rus6Geometry<double> g = machine == 0 ? make_rus6_ref<double>() : make_custom_machine(nullptr);
+    double worst = 0;
+    for (const auto& o : box_offsets(40, kBoxMm, kBoxRad, 71 + machine)) {
+      const Pose<double> pose = offset_pose<double>(g.home, o.data());
+      double values[12];
+      ASSERT_EQ(rus6_formula_joint_values(g, pose, values), Status::Ok);
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(values[i], g.rod_length(i));
+        const double h = 1e-4;
+        Rus6Geometry<double> longer = g, shorter = g;
+        longer.rod_length(i) += h;
+        shorter.rod_length(i) -= h;
+        Vec6<double> qp = Vec6<double>::Zero(), qm = Vec6<double>::Zero();
+        ASSERT_EQ(rus6_ik(longer, pose, qp), Status::Ok);
+        ASSERT_EQ(rus6_ik(shorter, pose, qm), Status::Ok);
+        const double dq_dl = (qp(i) - qm(i)) / (2 * h);
+        worst = std::max(worst, std::abs(dq_dl * values[6 + i] + 1));
+      }
+    }
+    EXPECT_LT(worst, 1e-6) << "machine " << machine;
+  }
+  // Out of reach: the IK's status, nothing written.
+  const Rus6Geometry<double> g = make_rus6_ref<double>();
+  Pose<double> far = g.home;
+  far.p.z() += 500;
+  double values[12] = {};
+  EXPECT_EQ(rus6_formula_joint_values(g, far, values), Status::Unreachable);
+  EXPECT_EQ(values[0], 0.0);
+}
+
 TEST(CoreRus6, ForwardJacobianInvertsInverseJacobian) {
   for (int machine = 0; machine < 2; ++machine) {
     const Rus6Geometry<double> g = machine == 0 ? make_rus6_ref<double>() : make_custom_machine(nullptr);
@@ -422,7 +460,7 @@ TEST(CoreRus6, ForwardJacobianInvertsInverseJacobian) {
     int checked = 0;
     for (const auto& off : box_offsets(200, machine == 0 ? kBoxMm : 30.0, machine == 0 ? kBoxRad : 6 * kDeg, 22)) {
       const Pose<double> pose = offset_pose<double>(g.home, off.data());
-      Vec6<double> q;
+      Vec6<double> q = Vec6<double>::Zero();
       Mat6<double> J, F;
       Rus6Legs<double> legs;
       if (rus6_ik(g, pose, q, &J, &legs) != Status::Ok) continue;
@@ -436,7 +474,7 @@ TEST(CoreRus6, ForwardJacobianInvertsInverseJacobian) {
   }
   // And in float on the reference machine.
   const Rus6Geometry<float> gf = make_rus6_ref<float>();
-  Vec6<float> q;
+  Vec6<float> q = Vec6<float>::Zero();
   Mat6<float> J, F;
   Rus6Legs<float> legs;
   const double off[6] = {20, -10, 15, 5 * kDeg, -3 * kDeg, 8 * kDeg};
@@ -450,7 +488,7 @@ TEST(CoreRus6, ForwardJacobianMatchesFkDifferences) {
   const Rus6Geometry<double> g = make_rus6_ref<double>();
   const double off[6] = {-25, 15, -30, -6 * kDeg, 4 * kDeg, 9 * kDeg};
   const Pose<double> pose = offset_pose<double>(g.home, off);
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   Rus6Legs<double> legs;
   ASSERT_EQ(rus6_ik(g, pose, q, nullptr, &legs), Status::Ok);
   Mat6<double> F;
@@ -468,10 +506,10 @@ TEST(CoreRus6, ForwardJacobianMatchesFkDifferences) {
 // ---- the custom machine ------------------------------------------------------
 
 TEST(CoreRus6, CustomMachineHomeAndRoundTrip) {
-  Vec6<double> q_home;
+  Vec6<double> q_home = Vec6<double>::Zero();
   const Rus6Geometry<double> g = make_custom_machine(&q_home);
   ASSERT_TRUE(rus6_valid_geometry(g));
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   ASSERT_EQ(rus6_ik(g, g.home, q), Status::Ok);
   EXPECT_LT((q - q_home).cwiseAbs().maxCoeff(), 1e-12);
   Pose<double> found;
@@ -525,7 +563,7 @@ template <class Scalar> void check_statuses() {
   Rus6Geometry<Scalar> wide = g;
   wide.min_joint.setConstant(-pi<Scalar>() + Scalar(0.01));
   wide.max_joint.setConstant(pi<Scalar>() - Scalar(0.01));
-  Vec6<Scalar> q_wide;
+  Vec6<Scalar> q_wide = Vec6<Scalar>::Zero();
   EXPECT_EQ(rus6_ik(wide, up, q_wide), Status::Ok);  // reachable indeed
   EXPECT_GT(q_wide.maxCoeff(), g.max_joint(0));
   EXPECT_EQ(q, q_untouched);
@@ -547,7 +585,7 @@ template <class Scalar> void check_statuses() {
   // No iterations allowed from a distant guess: NotConverged, iterations reported.
   FkOptions<Scalar> no_steps;
   no_steps.max_iterations = 0;
-  Vec6<Scalar> q_moved;
+  Vec6<Scalar> q_moved = Vec6<Scalar>::Zero();
   const double off[6] = {20, 0, 10, 0, 0, 5 * kDeg};
   ASSERT_EQ(rus6_ik(g, offset_pose<Scalar>(g.home.template cast<double>(), off), q_moved), Status::Ok);
   const FkReport<Scalar> r = rus6_fk(g, q_moved, g.home, pose, no_steps);
@@ -577,7 +615,7 @@ TEST(CoreRus6, ParallelSingularityIsReported) {
     g.platform_joints.col(i) = Vec3<double>(tip.x(), tip.y(), 0.0);
   }
   g.home = Pose<double>::from_xyz_rpy(0, 0, 300, 0, 0, 0);
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   ASSERT_EQ(rus6_ik(g, g.home, q), Status::Ok);
   EXPECT_LT(q.cwiseAbs().maxCoeff(), 1e-12);
   Mat6<double> J = Mat6<double>::Zero();
@@ -598,7 +636,7 @@ TEST(CoreRus6, SerialSingularityAndSphereOnShaftLine) {
   g.min_joint.setConstant(-3.1);
   g.max_joint.setConstant(3.1);
   double reachable = 100, unreachable = 130;
-  Vec6<double> q;
+  Vec6<double> q = Vec6<double>::Zero();
   for (int it = 0; it < 200; ++it) {
     const double mid = 0.5 * (reachable + unreachable);
     Pose<double> p = g.home;
@@ -641,7 +679,7 @@ TEST(CoreRus6, BranchRuleWhenBothBranchesFitTheLimits) {
   g.max_joint.setConstant(3.0);
   const double off[6] = {10, -5, 20, 2 * kDeg, 0, -3 * kDeg};
   const Pose<double> pose = offset_pose<double>(g.home, off);
-  Vec6<double> home_branch_q, other_q, nearest_q;
+  Vec6<double> home_branch_q = Vec6<double>::Zero(), other_q = Vec6<double>::Zero(), nearest_q = Vec6<double>::Zero();
   Rus6Legs<double> legs;
   ASSERT_EQ(rus6_ik(g, pose, home_branch_q, nullptr, &legs), Status::Ok);  // home_branch = −1
   EXPECT_EQ(rus6_branches(legs), g.home_branch);
@@ -671,7 +709,7 @@ TEST(CoreRus6, LimitsWindowNotCentredOnZero) {
   turned.max_joint = g.max_joint + Vec6<double>::Constant(3.14159265358979323846);
   const double off[6] = {-12, 30, -20, 4 * kDeg, 7 * kDeg, 1 * kDeg};
   const Pose<double> pose = offset_pose<double>(g.home, off);
-  Vec6<double> q, q_turned;
+  Vec6<double> q = Vec6<double>::Zero(), q_turned = Vec6<double>::Zero();
   ASSERT_EQ(rus6_ik(g, pose, q), Status::Ok);
   ASSERT_EQ(rus6_ik(turned, pose, q_turned), Status::Ok);
   EXPECT_LT((q_turned - q - Vec6<double>::Constant(3.14159265358979323846)).cwiseAbs().maxCoeff(), 1e-12);
@@ -711,14 +749,14 @@ TEST(CoreRus6, NoHeap) {
   const Rus6Geometry<double> gd = make_rus6_ref<double>();
   const Rus6Geometry<float> gf = make_rus6_ref<float>();
   HeapForbidden guard;
-  Vec6<double> qd;
+  Vec6<double> qd = Vec6<double>::Zero();
   Mat6<double> Jd, Fd;
   Rus6Legs<double> legsd;
   ASSERT_EQ(rus6_ik(gd, gd.home, qd, &Jd, &legsd), Status::Ok);
   ASSERT_EQ(rus6_forward_jacobian(gd, legsd, Fd), Status::Ok);
   Pose<double> pd;
   ASSERT_EQ(rus6_fk(gd, Vec6<double>(Vec6<double>::Constant(0.1)), gd.home, pd).status, Status::Ok);
-  Vec6<float> qf;
+  Vec6<float> qf = Vec6<float>::Zero();
   Mat6<float> Jf;
   ASSERT_EQ(rus6_ik(gf, gf.home, qf, &Jf), Status::Ok);
   Pose<float> pf;

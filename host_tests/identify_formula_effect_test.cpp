@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/identify/formula_effect.hpp"
 #include "kincal/identify/input_error.hpp"
 
@@ -279,6 +280,62 @@ TEST(FormulaEffect, UnknownSymbolIsNamedWithTheAllowedOnes) {
   EXPECT_NE(message(joint_spec("f", {1}, {"a"}, {}, "a * x")).find("unknown symbol 'x'"), std::string::npos);
   // GiNaC's own literals are no way in.
   EXPECT_NE(message(joint_spec("f", {1}, {"a"}, {}, "a * I")).find("unknown symbol 'I'"), std::string::npos);
+}
+
+// Numbers a family offers per joint (the 6-RUS's rod and lever): in a
+// joint-kind formula the bare name is the acting joint's, name1..name6 any
+// joint's; they sit where core's compensator writes them
+// (FormulaSlot::family_joint, after kFormulaInputs input slots), so the
+// generated C++ and the host read one array.
+TEST(FormulaEffect, FamilyJointVariablesAreTheJointsOwnAndEachJoints) {
+  ki::FormulaContext context;
+  context.family_joint_variables = {"rod", "lever"};
+  context.max_inputs = kincal::kFormulaInputs;
+  const ki::FormulaEffect rods(
+      joint_spec("rods", {2, 5}, {"a"}, {"b"}, "a * rod * (temp - 20) / lever + b * lever3"), context);
+  const ki::FormulaLayout& l = rods.layout();
+  EXPECT_EQ(l.family_joint(0, 1), kincal::FormulaSlot::family_joint);
+  EXPECT_EQ(l.family_joint(1, 1), kincal::FormulaSlot::family_joint + 6);
+  EXPECT_EQ(l.size(), kincal::FormulaSlot::count);
+  EXPECT_TRUE(rods.uses_family());
+  EXPECT_TRUE(rods.uses_temperature());
+  EXPECT_FALSE(ki::FormulaEffect(joint_spec("plain", {1}, {"a"}, {}, "a * q"), context).uses_family());
+
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> v = random_node(l, rng);
+  for (int j = 1; j <= 6; ++j) {
+    v[std::size_t(l.family_joint(0, j))] = 300 + j;
+    v[std::size_t(l.family_joint(1, j))] = 80 * u(rng);
+  }
+  const double params[3] = {2e-5, 3e-5, 0.7};  // a2, a5, b
+  for (int k = 0; k < 2; ++k) {
+    const int j = rods.joints()[std::size_t(k)];
+    const double expected = params[k] * (300 + j) * (v[std::size_t(l.temp())] - 20) / v[std::size_t(l.family_joint(1, j))] +
+                            params[2] * v[std::size_t(l.family_joint(1, 3))];
+    EXPECT_NEAR(rods.value(k, v.data(), params), expected, 1e-15 * (1 + std::abs(expected))) << "joint " << j;
+  }
+
+  // A pose effect has no joint of its own: lever3 yes, lever no.
+  ki::FormulaEffectSpec pose;
+  pose.name = "p";
+  pose.kind = ki::FormulaKind::Pose;
+  pose.shared = {"k"};
+  pose.formulas = {"k * lever3", "0", "0", "0", "0", "0"};
+  EXPECT_TRUE(ki::FormulaEffect(pose, context).uses_family());
+  pose.formulas[0] = "k * lever";
+  EXPECT_NE(error_of([&] { ki::FormulaEffect(pose, context); }).message().find("unknown symbol 'lever'"),
+            std::string::npos);
+  // The family's names are taken: no parameter or input may use them.
+  EXPECT_NE(error_of([&] { ki::FormulaEffect(joint_spec("f", {1}, {"rod"}, {}, "rod * q"), context); })
+                .message()
+                .find("'rod' is used twice"),
+            std::string::npos);
+  // And an unknown symbol's message lists them.
+  EXPECT_NE(error_of([&] { ki::FormulaEffect(joint_spec("f", {1}, {"a"}, {}, "a * crank"), context); })
+                .message()
+                .find("rod, rod1..rod6, lever, lever1..lever6"),
+            std::string::npos);
 }
 
 TEST(FormulaEffect, EveryContractRuleHasItsError) {

@@ -135,7 +135,7 @@ TEST(IndependentRus6, RefAgreesWithCoreAtZeroErrors) {
   const kincal::Rus6Geometry<double> g = kincal::make_rus6_ref<double>();
   EXPECT_NEAR(g.home.p.z(), n.home(2), 1e-12);
   for (const V6& v : ind::rus6_random_poses(n, 200, 11)) {
-    V6 ours, core;
+    V6 ours = V6::Zero(), core = V6::Zero();
     ASSERT_TRUE(sim.ik(Pose<double>::from_xyz_rpy(v), ours));
     ASSERT_EQ(kincal::rus6_ik(g, Pose<double>::from_xyz_rpy(v), core), kincal::Status::Ok);
     EXPECT_LT((ours - core).cwiseAbs().maxCoeff(), 1e-11) << v.transpose();

@@ -280,7 +280,8 @@ TEST(PortController, AUserEffectComesWithTheTableAndItsCodeWithTheConfig) {
 // controller hands the stream's time and inputs to the compensator.
 struct DriftFormulas {
   static constexpr bool present = true;
-  static constexpr bool pose_twist = false, reads_pose = false, reads_load = false, reads_stream = true;
+  static constexpr bool pose_twist = false, reads_pose = false, reads_load = false, reads_stream = true,
+                        reads_family = false;
   void add_joint_error(const double* params, const double* vars, double* dq) const {
     dq[2] += params[0] * vars[FormulaSlot::time] + params[1] * vars[FormulaSlot::input];
     dq[4] += params[2] * (vars[FormulaSlot::temp] - 20) * vars[FormulaSlot::q + 4];

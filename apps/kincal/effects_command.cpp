@@ -37,11 +37,16 @@ int run_effects(const EffectsArgs& a) {
     e["inputs"] = effect->inputs();
     list.push_back(e);
   }
+  // What the family offers formula effects beside q, dir, load, temp, …
+  nlohmann::json offered = nlohmann::json::array();
+  for (const ki::FamilyFormulaVariable& v : ki::family_formula_variables(robot))
+    offered.push_back({{"name", v.name}, {"description", v.description}});
   if (a.json) {
     nlohmann::json out;
     out["robot"] = robot.name;
     out["screw_lead_mm"] = frame.screw_lead;
     out["effects"] = list;
+    out["formula_family_variables"] = offered;
     std::cout << out.dump(2) << "\n";
     return 0;
   }
@@ -56,6 +61,12 @@ int run_effects(const EffectsArgs& a) {
               << "\n  parameters:";
     for (const auto& p : e["parameters"]) std::cout << " " << p.get<std::string>();
     std::cout << "\n  needs: " << e["inputs"].get<std::string>() << "\n";
+  }
+  if (!offered.empty()) {
+    std::cout << "\nformula variables this family offers (robot description key `effects`; NAME is this joint's in a "
+                 "joint-kind formula, NAME1..NAME6 any joint's):\n";
+    for (const nlohmann::json& v : offered)
+      std::cout << "  " << v["name"].get<std::string>() << ": " << v["description"].get<std::string>() << "\n";
   }
   return 0;
 }

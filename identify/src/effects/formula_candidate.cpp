@@ -7,6 +7,7 @@
 #include <limits>
 #include <utility>
 
+#include "kincal/core/formula_effects.hpp"
 #include "kincal/identify/input_error.hpp"
 
 namespace kincal::identify {
@@ -104,6 +105,9 @@ std::vector<double> formula_variables(const Robot& robot, const EffectNode& node
   FormulaLayout lay;
   lay.joints = 6;
   lay.input_count = int(robot.formula_inputs.size());
+  lay.input_capacity = kFormulaInputs;
+  const std::vector<FamilyFormulaVariable> offered = family_formula_variables(robot);
+  lay.family_joint_count = int(offered.size());
   std::vector<double> v(std::size_t(lay.size()), 0.0);
   for (int j = 1; j <= 6; ++j) {
     v[std::size_t(lay.q(j))] = q(j - 1);
@@ -126,6 +130,14 @@ std::vector<double> formula_variables(const Robot& robot, const EffectNode& node
   for (int i = 0; i < lay.input_count; ++i)
     v[std::size_t(lay.input(i))] =
         i < int(node.formula_inputs.size()) ? node.formula_inputs[std::size_t(i)] : std::numeric_limits<double>::quiet_NaN();
+  if (!offered.empty()) {
+    // Where the family cannot give them (its IK fails at the pose), NaN:
+    // a formula that reads them is then refused at this node, by name.
+    std::vector<double> values(offered.size() * 6, std::numeric_limits<double>::quiet_NaN());
+    family_formula_values(robot, node.pose, values.data());
+    for (int k = 0; k < lay.family_joint_count; ++k)
+      for (int j = 1; j <= 6; ++j) v[std::size_t(lay.family_joint(k, j))] = values[std::size_t(k * 6 + j - 1)];
+  }
   return v;
 }
 

@@ -148,6 +148,7 @@ struct FormulaEffect::Impl {
   std::vector<int> value_slot;                   // per component (1 or 6)
   std::vector<std::vector<int>> derivative_slot; // [component][base…, shared…]: slot, −1 = identically 0
   bool temperature = false, time = false, direction = false, load = false, pose_variables = false;
+  bool family = false;  // reads a family variable
   std::vector<bool> input_used;
 
   [[noreturn]] void fail(const std::string& key, const std::string& message) const {
@@ -601,7 +602,9 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
   // one (every effect of a machine reads one layout, as the controller
   // fills it), else this entry's own.
   const std::vector<std::string>& input_layout = context.input_layout.empty() ? s.inputs : context.input_layout;
-  const FormulaLayout lay{N, static_cast<int>(input_layout.size()), static_cast<int>(context.family_variables.size())};
+  FormulaLayout lay{N, static_cast<int>(input_layout.size()), static_cast<int>(context.family_variables.size())};
+  lay.input_capacity = context.max_inputs > 0 ? context.max_inputs : 0;
+  lay.family_joint_count = static_cast<int>(context.family_joint_variables.size());
   m.layout = lay;
   std::set<std::string> reserved;  // every built-in variable name, whatever the kind
   for (const char* v : {"q", "dir", "load", "temp", "time", "pi"}) reserved.insert(v);
@@ -640,6 +643,20 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
     sources[v] = {SymbolSource::Var, lay.family(static_cast<int>(i)), v};
     variables.push_back(v);
     taken.insert(v);
+  }
+  for (std::size_t k = 0; k < context.family_joint_variables.size(); ++k) {
+    const std::string& v = context.family_joint_variables[k];
+    const int variable = static_cast<int>(k);
+    if (joint_kind) {
+      sources[v] = {SymbolSource::ThisJoint, lay.family_joint(variable, 1), v};
+      variables.push_back(v);
+    }
+    variables.push_back(range_name(v, N));
+    taken.insert(v);
+    for (int j = 1; j <= N; ++j) {
+      sources[v + std::to_string(j)] = {SymbolSource::Var, lay.family_joint(variable, j), v + std::to_string(j)};
+      taken.insert(v + std::to_string(j));
+    }
   }
   const auto check_name = [&](const std::string& key, const std::string& what, const std::string& n) {
     if (!is_identifier(n)) m.fail(key, what + " " + in_quotes(n) + " is not a name (a letter or '_', then letters, digits or '_')");
@@ -839,6 +856,7 @@ FormulaEffect::FormulaEffect(const FormulaEffectSpec& spec, const FormulaContext
       if (at >= lay.dir(1) && at <= lay.dir(N)) m.direction = true;
       if (at >= lay.load(1) && at <= lay.load(N)) m.load = true;
       if (at >= lay.pose(0) && at <= lay.pose(5)) m.pose_variables = true;
+      if (at >= lay.family(0) && at < lay.size()) m.family = true;
     }
   }
 
@@ -893,6 +911,7 @@ bool FormulaEffect::uses_time() const { return impl_->time; }
 bool FormulaEffect::uses_direction() const { return impl_->direction; }
 bool FormulaEffect::uses_load() const { return impl_->load; }
 bool FormulaEffect::uses_pose() const { return impl_->pose_variables; }
+bool FormulaEffect::uses_family() const { return impl_->family; }
 bool FormulaEffect::uses_inputs() const {
   for (const bool used : impl_->input_used)
     if (used) return true;

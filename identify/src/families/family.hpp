@@ -178,6 +178,11 @@ class FamilyKinematics {
   virtual void set_effect_frame(const Robot&, EffectParameters<double>&) const {}
   // The actual machine of a simulation (nominal and actual are this family's).
   virtual std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const = 0;
+  // The numbers the family offers formula effects per joint (at most
+  // core's kFormulaFamilyJointVariables), and their values at the nominal
+  // configuration of a commanded pose (robot.hpp family_formula_values).
+  virtual std::vector<FamilyFormulaVariable> formula_joint_variables() const { return {}; }
+  virtual bool formula_joint_values(const Robot&, const Pose<double>&, double*) const { return true; }
 };
 
 // Its error model: the parameters a calibration identifies.

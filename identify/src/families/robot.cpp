@@ -49,6 +49,13 @@ const char* Robot::target_body() const { return family_of(*this).kinematics().ta
 const char* Robot::error_model() const { return family_of(*this).error_model().name(); }
 Eigen::Index Robot::outlier_min_nodes() const { return family_of(*this).error_model().outlier_min_nodes(); }
 
+std::vector<FamilyFormulaVariable> family_formula_variables(const Robot& robot) {
+  return family_of(robot).kinematics().formula_joint_variables();
+}
+bool family_formula_values(const Robot& robot, const Pose<double>& pose, double* values) {
+  return family_of(robot).kinematics().formula_joint_values(robot, pose, values);
+}
+
 // ---------------------------------------------------------------- built-ins
 
 bool is_builtin_robot(const std::string& name) {
@@ -96,6 +103,7 @@ void read_formula_effects_into(Robot& robot, const json& doc, const std::string&
   FormulaContext context;
   context.joint_count = Robot::joint_count();
   context.max_inputs = kFormulaInputs;
+  for (const FamilyFormulaVariable& v : family_formula_variables(robot)) context.family_joint_variables.push_back(v.name);
   std::vector<FormulaEffect> effects = read_formula_effects(text, file, context);
   const detail::DescriptionReader r(text, file);
   int offset = 0;

@@ -181,10 +181,11 @@ void emit_formulas(std::ostream& out, const Robot& robot) {
   }
   out << "\n";
   for (const auto& c : effects) out << c->formula().cpp_function(c->formula().cpp_function_name()) << "\n";
-  bool pose = false, reads_pose = false, reads_load = false, reads_stream = false;
+  bool pose = false, reads_pose = false, reads_load = false, reads_stream = false, reads_family = false;
   for (const auto& c : effects) {
     const FormulaEffect& f = c->formula();
     pose = pose || f.kind() == FormulaKind::Pose;
+    reads_family = reads_family || f.uses_family();
     reads_pose = reads_pose || f.uses_pose();
     reads_load = reads_load || f.uses_load();
     reads_stream = reads_stream || f.uses_time() || f.uses_inputs();
@@ -209,7 +210,8 @@ void emit_formulas(std::ostream& out, const Robot& robot) {
       << "  static constexpr bool present = true;\n"
       << "  // What the formulas read (the rest is not computed: core/formula_effects.hpp).\n"
       << "  static constexpr bool pose_twist = " << flag(pose) << ", reads_pose = " << flag(reads_pose)
-      << ", reads_load = " << flag(reads_load) << ", reads_stream = " << flag(reads_stream) << ";\n"
+      << ", reads_load = " << flag(reads_load) << ", reads_stream = " << flag(reads_stream)
+      << ", reads_family = " << flag(reads_family) << ";\n"
       << "  void add_joint_error(const Scalar* params, const Scalar* vars, Scalar* dq) const {\n"
       << "    (void)params; (void)vars; (void)dq;\n";
   members(FormulaKind::Joint, "dq");

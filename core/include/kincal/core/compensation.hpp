@@ -64,15 +64,6 @@
 #endif
 #endif
 
-#if defined(__GNUC__)
-#define KINCAL_NOINLINE __attribute__((noinline))
-// Not inlined itself, but everything it calls is: the IK below is compiled
-// for its one use (no Jacobian), so the Jacobian code is not linked in.
-#define KINCAL_NOINLINE_FLATTEN __attribute__((noinline, flatten))
-#else
-#define KINCAL_NOINLINE
-#define KINCAL_NOINLINE_FLATTEN
-#endif
 
 namespace kincal {
 
@@ -236,6 +227,9 @@ template <class S> struct Model<StewartMachine<S>> {
     return solve_closed_form(target, ideal);
   }
   Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return stewart_ik(calibrated, target, ideal); }
+
+  // The family offers its formulas no per-joint numbers.
+  Status formula_joint_values(const Pose<S>&, S*) const { return Status::Ok; }
 };
 
 template <class S> struct Model<HybridMachine<S>> {
@@ -307,6 +301,9 @@ template <class S> struct Model<HybridMachine<S>> {
 #endif
   }
   Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return hybrid_ik(controller, target, ideal); }
+
+  // The family offers its formulas no per-joint numbers.
+  Status formula_joint_values(const Pose<S>&, S*) const { return Status::Ok; }
 };
 
 }  // namespace compensation_detail
@@ -466,7 +463,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
     EffectInputs<Scalar> inputs;
     inputs.load.setZero();
     Vec6<Scalar> nominal_q, ideal;
-    FormulaVariables<Scalar> vars;
+    FormulaVariables<Scalar, Formulas::reads_family> vars;
     if constexpr (Formulas::present) {
       vars.v[FormulaSlot::temp] = temperature;
       if constexpr (Formulas::reads_pose) vars.set_pose(point.pose);
@@ -537,7 +534,7 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
   // its kinematics put it; formula_pose_precorrect).
   CompensationStatus geometry(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                               Vec6<Scalar>& ideal, Vec6<Scalar>& load, CompensatorWarmStart<Scalar>* warm,
-                              [[maybe_unused]] FormulaVariables<Scalar>& vars) const {
+                              [[maybe_unused]] FormulaVariables<Scalar, Formulas::reads_family>& vars) const {
     Pose<Scalar> target;
     if constexpr (Formulas::present) {
       // Only what the machine's formulas read is computed (the policy's
@@ -547,6 +544,10 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
           prepare(pose, temperature, nominal_q, load, target, &payload_load);
       if (st != CompensationStatus::Ok) return st;
       if constexpr (Formulas::reads_load) vars.set_loads(payload_load);
+      if constexpr (Formulas::reads_family) {
+        const Status fs = model_.formula_joint_values(pose, vars.v + FormulaSlot::family_joint);
+        if (fs != Status::Ok) return to_compensation_status(fs);
+      }
       if constexpr (Formulas::pose_twist) {
         if (formulas_.has_pose()) {
           vars.set_joints(nominal_q);

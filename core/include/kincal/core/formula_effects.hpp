@@ -12,7 +12,8 @@
 //     // no code): a pose-kind effect, the pose variables x..rz, the static
 //     // loads `load`, the NC stream's time or named inputs. A generated
 //     // policy knows exactly; the host's says true and decides at run time.
-//     static constexpr bool pose_twist, reads_pose, reads_load, reads_stream;
+//     static constexpr bool pose_twist, reads_pose, reads_load, reads_stream,
+//                           reads_family;  // the family's per-joint numbers
 //     // Δq of every joint-kind effect, added to dq[0..5], at the variables
 //     // `vars` (FormulaVariables' layout) and the numbers `params`
 //     // (EffectParameters::user: the table's numbers of the formulas).
@@ -48,6 +49,11 @@ namespace kincal {
 // in that order (NcPoint::inputs).
 constexpr int kFormulaInputs = 4;
 
+// Numbers a family offers its formulas per joint (GUIDE "Effects written as
+// formulas": "what the family offers"; the 6-RUS's `rod` and `lever`,
+// rus6.hpp rus6_formula_joint_values), at most this many.
+constexpr int kFormulaFamilyJointVariables = 2;
+
 // The variables of one NC point, in identify's FormulaLayout order for six
 // joints (identify/formula_effect.hpp): what the generated functions index.
 struct FormulaSlot {
@@ -58,11 +64,18 @@ struct FormulaSlot {
   static constexpr int time = 19;  // s
   static constexpr int pose = 20;  // x y z rx ry rz of the commanded pose
   static constexpr int input = 26; // the named inputs
-  static constexpr int count = input + kFormulaInputs;
+  // The family's per-joint numbers, six per variable (identify's
+  // FormulaLayout::family_joint with kFormulaInputs input slots).
+  static constexpr int family_joint = input + kFormulaInputs;
+  static constexpr int count = family_joint + 6 * kFormulaFamilyJointVariables;
 };
 
-template <class S> struct FormulaVariables {
-  S v[FormulaSlot::count] = {};
+// `kFamily`: with the family's per-joint slots (a policy that reads them);
+// without, 12 numbers fewer on the controller's stack (a generated policy
+// whose formulas do not read them never indexes past FormulaSlot::family_joint).
+template <class S, bool kFamily = true> struct FormulaVariables {
+  static constexpr int size = kFamily ? FormulaSlot::count : FormulaSlot::family_joint;
+  S v[size] = {};
   void set_joints(const Vec6<S>& q) {
     for (int i = 0; i < 6; ++i) v[FormulaSlot::q + i] = q(i);
   }
@@ -81,7 +94,8 @@ template <class S> struct FormulaVariables {
 // No formula effect (the default policy): nothing to evaluate, no code.
 struct NoFormulaEffects {
   static constexpr bool present = false;
-  static constexpr bool pose_twist = false, reads_pose = false, reads_load = false, reads_stream = false;
+  static constexpr bool pose_twist = false, reads_pose = false, reads_load = false, reads_stream = false,
+                        reads_family = false;
   template <class S> void add_joint_error(const S*, const S*, S*) const {}
   template <class S> void add_pose_twist(const S*, const S*, S*) const {}
   bool has_pose() const { return false; }

@@ -243,21 +243,67 @@ template <class Scalar> Scalar wrap_about(Scalar x, Scalar mid) {
   const Scalar two_pi = Scalar(2) * pi<Scalar>();
   return x - two_pi * std::floor((x - mid + pi<Scalar>()) / two_pi);
 }
+
+// rus6_ik's Jacobian and legs at the physical angles θ (for a caller that
+// wants the legs), in a frame of its own. Writes only on Ok.
+template <class G, class Scalar>
+KINCAL_NOINLINE Status jacobian_and_legs(const G& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta,
+                                         Mat6<Scalar>* jacobian, Rus6Legs<Scalar>* legs) {
+  Rus6Legs<Scalar> at;
+  rus6_legs_at(g, pose, theta, at);
+  if (!all_finite(at.rod_units) || !all_finite(at.levers)) return Status::InvalidInput;
+  if (jacobian != nullptr) {
+    SmallLu<Scalar, 6> lu;
+    if (!rus6_factor_regular(g, at, lu)) return Status::Singular;
+    rus6_jacobian_into(*jacobian, at);
+  }
+  if (legs != nullptr) *legs = at;
+  return Status::Ok;
+}
+
+// rus6_ik's Jacobian alone: the numbers of rus6_legs_at, rus6_factor_regular
+// and rus6_jacobian_into, leg by leg, without the legs' 6-leg scratch (528 B
+// in double) and in a frame of its own. The controller's compensator asks
+// for it on its deepest stack path (the nominal configuration): a 6-RUS
+// image with formula effects needed 4 224 B of stack with the legs in the
+// IK's frame, over the 4 KiB bar (docs/benchmarks.md). Writes only on Ok.
+template <class G, class Scalar>
+KINCAL_NOINLINE Status checked_jacobian(const G& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta,
+                                        Mat6<Scalar>& jacobian) {
+  SmallLu<Scalar, 6> lu;
+  auto K = lu.storage();  // K_s: rus6_factor_regular's scaled wrenches
+  Mat6<Scalar> J;
+  bool finite = true, regular = true;
+  for (int i = 0; i < 6; ++i) {
+    const Vec3<Scalar> arm = pose.R * Vec3<Scalar>(g.platform_joints.col(i));
+    const Vec3<Scalar> tip = rus6_crank_tip(g, i, theta(i));
+    const Vec3<Scalar> rod = arm + pose.p - tip;
+    const Vec3<Scalar> u = rod / rod.norm();
+    const Vec3<Scalar> tip_velocity =
+        Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(tip - g.shaft_points.col(i)));
+    const Scalar lever = u.dot(tip_velocity);
+    finite = finite && all_finite(u) && is_finite(lever);
+    regular = regular && std::abs(lever) > Tolerance<Scalar>::singular_pivot_ratio * g.crank_length(i);
+    const Vec3<Scalar> moment = arm.cross(u);
+    const Scalar inv_lever = Scalar(1) / lever;
+    K.template block<1, 3>(i, 0) = u.transpose();
+    K.template block<1, 3>(i, 3) = moment.transpose();
+    J.template block<1, 3>(i, 0) = inv_lever * u.transpose();
+    J.template block<1, 3>(i, 3) = inv_lever * moment.transpose();
+  }
+  if (!finite) return Status::InvalidInput;
+  if (!regular) return Status::Singular;
+  K.template rightCols<3>() *= Scalar(1) / g.characteristic_length;
+  if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<Scalar>::singular_pivot_ratio)) return Status::Singular;
+  jacobian = J;
+  return Status::Ok;
+}
 }  // namespace rus6_detail
 
-// IK: commands q for a platform pose, closed form per leg (header comment).
-// Writes `q` (and `jacobian` = ∂q/∂twist, and `legs`, if given) only on Ok.
-//   InvalidInput  non-finite pose (or geometry)
-//   Unreachable   some leg has |C| > ρ: the rod cannot reach its crank circle
-//   Singular      ρ = 0 with C = 0 (the sphere on the shaft line: every θ
-//                 closes), or, when the Jacobian is requested, a serial
-//                 (λ_i ≈ 0) or parallel (K singular) singularity
-//   OutOfLimits   neither branch of some leg inside [min_joint, max_joint]
-template <class G, class Scalar>
-Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian = nullptr,
-               NonDeducedT<Rus6Legs<Scalar>>* legs = nullptr) {
+namespace rus6_detail {
+// The IK's commands, closed form per leg (rus6_ik below).
+template <class G, class Scalar> Status closed_form_commands(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& cmd) {
   if (!pose.finite()) return Status::InvalidInput;
-  Vec6<Scalar> cmd;
   for (int i = 0; i < 6; ++i) {
     const Vec3<Scalar> d = pose.R * g.platform_joints.col(i) + pose.p - g.shaft_points.col(i);
     const Vec3<Scalar> z = g.crank_zero.col(i);
@@ -304,17 +350,43 @@ Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeduced
     }
   }
   if (!all_finite(cmd)) return Status::InvalidInput;
-  if (jacobian != nullptr || legs != nullptr) {
-    Rus6Legs<Scalar> at;
-    rus6_legs_at(g, pose, Vec6<Scalar>(cmd + g.joint_offset), at);
-    if (!all_finite(at.rod_units) || !all_finite(at.levers)) return Status::InvalidInput;
-    if (jacobian != nullptr) {
-      SmallLu<Scalar, 6> lu;
-      if (!rus6_factor_regular(g, at, lu)) return Status::Singular;
-      rus6_jacobian_into(*jacobian, at);
-    }
-    if (legs != nullptr) *legs = at;
+  return Status::Ok;
+}
+}  // namespace rus6_detail
+
+// IK: commands q for a platform pose, closed form per leg (header comment).
+// Writes `q` (and `jacobian` = ∂q/∂twist, and `legs`, if given) only on Ok.
+//   InvalidInput  non-finite pose (or geometry)
+//   Unreachable   some leg has |C| > ρ: the rod cannot reach its crank circle
+//   Singular      ρ = 0 with C = 0 (the sphere on the shaft line: every θ
+//                 closes), or, when the Jacobian is requested, a serial
+//                 (λ_i ≈ 0) or parallel (K singular) singularity
+//   OutOfLimits   neither branch of some leg inside [min_joint, max_joint]
+// Two overloads, so that a caller without `legs` (the controller) has no
+// path to the legs' scratch: a static stack bound counts every call a
+// function can make, taken or not.
+template <class G, class Scalar>
+Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian = nullptr) {
+  Vec6<Scalar> cmd;
+  const Status s = rus6_detail::closed_form_commands(g, pose, cmd);
+  if (s != Status::Ok) return s;
+  if (jacobian != nullptr) {
+    const Status js = rus6_detail::checked_jacobian(g, pose, Vec6<Scalar>(cmd + g.joint_offset), *jacobian);
+    if (js != Status::Ok) return js;
   }
+  q = cmd;
+  return Status::Ok;
+}
+
+template <class G, class Scalar>
+Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian,
+               NonDeducedT<Rus6Legs<Scalar>>* legs) {
+  if (legs == nullptr) return rus6_ik(g, pose, q, jacobian);
+  Vec6<Scalar> cmd;
+  const Status s = rus6_detail::closed_form_commands(g, pose, cmd);
+  if (s != Status::Ok) return s;
+  const Status ls = rus6_detail::jacobian_and_legs(g, pose, Vec6<Scalar>(cmd + g.joint_offset), jacobian, legs);
+  if (ls != Status::Ok) return ls;
   q = cmd;
   return Status::Ok;
 }
@@ -330,6 +402,32 @@ template <class Scalar> Status rus6_home_branches(const Rus6Geometry<Scalar>& g,
   const Status st = rus6_ik(unknown, g.home, q, nullptr, &legs);
   if (st != Status::Ok) return st;
   branches = rus6_branches(legs);
+  return Status::Ok;
+}
+
+// The numbers the 6-RUS offers its formula effects per joint (GUIDE
+// "Effects written as formulas", `kincal effects --robot R`), at the
+// nominal configuration of a commanded pose: values[i] = `rod` ℓ_i (mm),
+// values[6 + i] = `lever` λ_i (header comment: mm of rod per rad of crank,
+// signed by the branch). A rod longer by δℓ moves the platform as a crank
+// turned by δℓ / λ_i does (r·ṙ = 0 with |r| = ℓ + δℓ: λ dθ = δℓ), so rods
+// expanding with temperature are the joint effect
+//   a · rod · (temp − 20) / lever.
+// Status of the IK where it fails (the host passes a geometry with its
+// limits opened for measured rows, as for the rest of a node). Leg by leg,
+// as rus6_legs_at, without its 6-leg scratch (the controller calls it
+// beside its compensation).
+template <class G, class Scalar> Status rus6_formula_joint_values(const G& g, const Pose<Scalar>& pose, Scalar* values) {
+  Vec6<Scalar> q;
+  const Status s = rus6_ik(g, pose, q);
+  if (s != Status::Ok) return s;
+  for (int i = 0; i < 6; ++i) {
+    const Vec3<Scalar> tip = rus6_crank_tip(g, i, Scalar(q(i) + g.joint_offset(i)));
+    const Vec3<Scalar> rod = pose.R * Vec3<Scalar>(g.platform_joints.col(i)) + pose.p - tip;
+    const Vec3<Scalar> tip_velocity = Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(tip - g.shaft_points.col(i)));
+    values[i] = g.rod_length(i);
+    values[6 + i] = rod.dot(tip_velocity) / rod.norm();
+  }
   return Status::Ok;
 }
 

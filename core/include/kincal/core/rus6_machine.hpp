@@ -250,6 +250,13 @@ template <class S> struct Model<Rus6Machine<S>> {
   Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const {
     return rus6_ik(Rus6GeometryRef<S>(machine->calibrated), target, ideal);
   }
+
+  // `rod` and `lever` of every joint at the nominal configuration of the
+  // commanded pose, as identify evaluates them at a node. In a frame of its
+  // own: its IK's locals are off the stack when the compensator's IK runs.
+  KINCAL_NOINLINE Status formula_joint_values(const Pose<S>& pose, S* values) const {
+    return rus6_formula_joint_values(Rus6GeometryRef<S>(machine->nominal), pose, values);
+  }
 };
 
 }  // namespace compensation_detail

@@ -9,6 +9,20 @@
 #include <Eigen/LU>
 #include <cmath>
 
+// Stack control on the controller: a function whose locals must not share a
+// frame with its caller's (the worst-case stack is the deepest path, and
+// GCC -Os merges an inlined callee's locals into the caller's frame).
+#if defined(__GNUC__)
+#define KINCAL_NOINLINE __attribute__((noinline))
+// Not inlined itself, but everything it calls is: e.g. the compensator's
+// closed-form IK, compiled for its one use (no Jacobian), so the Jacobian
+// code is not linked in.
+#define KINCAL_NOINLINE_FLATTEN __attribute__((noinline, flatten))
+#else
+#define KINCAL_NOINLINE
+#define KINCAL_NOINLINE_FLATTEN
+#endif
+
 namespace kincal {
 
 template <class Scalar> using Vec3 = Eigen::Matrix<Scalar, 3, 1>;

@@ -45,7 +45,8 @@ class FormulaCandidate final : public Effect {
 // The variables a formula reads at a node (FormulaLayout order, the robot's
 // input list): joints `q` (the commands, or the iterate of a fixed point),
 // the node's directions, temperature, time, commanded pose and named inputs,
-// and the static joint loads under the robot's payload.
+// the static joint loads under the robot's payload, and the numbers the
+// family offers per joint (family_formula_variables) at the commanded pose.
 std::vector<double> formula_variables(const Robot& robot, const EffectNode& node, const Vec6<double>& q);
 
 // Δq of the robot's joint-kind formula effects at joints `q` of a node, with
@@ -70,7 +71,8 @@ class HostFormulaEffects {
  public:
   static constexpr bool present = true;
   // Everything may be read: has_pose() and the formulas decide at run time.
-  static constexpr bool pose_twist = true, reads_pose = true, reads_load = true, reads_stream = true;
+  static constexpr bool pose_twist = true, reads_pose = true, reads_load = true, reads_stream = true,
+                        reads_family = true;
   explicit HostFormulaEffects(const Robot& robot) : robot_(&robot) {}
   void add_joint_error(const double* params, const double* vars, double* dq) const;
   void add_pose_twist(const double* params, const double* vars, double* twist) const;

@@ -40,6 +40,10 @@ enum class FormulaKind {
 struct FormulaContext {
   int joint_count = 6;                        // N: q1..qN, dir1..dirN, load1..loadN
   std::vector<std::string> family_variables;  // extra numbers a family offers (`kincal effects --robot R`)
+  // Numbers a family offers per joint (the 6-RUS's `rod`, `lever`: kincal
+  // effects --robot R lists them): name (this joint's, in a joint-kind
+  // formula) and name1..nameN, as q and load.
+  std::vector<std::string> family_joint_variables;
   // Effect names a formula effect may not take (the built-in candidates;
   // the registry may pass its own list).
   std::vector<std::string> builtin_effects = {"scale", "backlash", "compliance", "thermal", "cyclic"};
@@ -84,10 +88,16 @@ struct FormulaEffectSpec {
 //   [2N, 3N)      load1..loadN static loads (compliance's statics)
 //   3N, 3N+1      temp (°C), time (s)
 //   3N+2 .. 3N+7  x, y, z, rx, ry, rz  commanded pose
-//   then the effect's inputs (spec order), then the family variables (context order).
+//   then the effect's inputs (spec order; a block of input_capacity slots
+//   when the machine reserves more than it uses, as core's kFormulaInputs),
+//   then the family variables (context order), then the family's per-joint
+//   variables (context order, N slots each: core's FormulaSlot::family_joint
+//   when the family variables are none and the capacity is kFormulaInputs).
 struct FormulaLayout {
   int joints = 6;
   int input_count = 0, family_count = 0;
+  int input_capacity = 0;        // slots reserved for inputs (at least input_count)
+  int family_joint_count = 0;    // per-joint family variables
   int q(int joint) const { return joint - 1; }  // joint 1-based
   int dir(int joint) const { return joints + joint - 1; }
   int load(int joint) const { return 2 * joints + joint - 1; }
@@ -95,8 +105,10 @@ struct FormulaLayout {
   int time() const { return 3 * joints + 1; }
   int pose(int component) const { return 3 * joints + 2 + component; }  // 0..5 = x..rz
   int input(int i) const { return 3 * joints + 8 + i; }
-  int family(int i) const { return 3 * joints + 8 + input_count + i; }
-  int size() const { return 3 * joints + 8 + input_count + family_count; }
+  int input_slots() const { return input_count > input_capacity ? input_count : input_capacity; }
+  int family(int i) const { return 3 * joints + 8 + input_slots() + i; }
+  int family_joint(int variable, int joint) const { return family(family_count) + variable * joints + joint - 1; }
+  int size() const { return family_joint(family_joint_count, 1); }
 };
 
 // Scratch of one evaluation (one double per program slot); reused, it makes
@@ -138,6 +150,7 @@ class FormulaEffect {
   bool uses_load() const;
   bool uses_pose() const;    // reads x, y, z, rx, ry or rz
   bool uses_inputs() const;  // reads one of its named inputs
+  bool uses_family() const;  // reads a variable the family offers
   // Measurement columns the data must carry ("temp", "time", the inputs;
   // directions and loads have defaults and are not listed).
   std::vector<std::string> required_columns() const;

@@ -50,6 +50,14 @@ HybridGeometry<double> make_hybrid_geometry(const HybridDesign& d);
 // The inverse: reads the design inputs back (β from the workpiece rotation).
 HybridDesign hybrid_design_of(const HybridGeometry<double>& g);
 
+// A number a family offers its formula effects per joint (GUIDE "Effects
+// written as formulas": "what the family offers"): `name` is this joint's in
+// a joint-kind formula, name1..name6 any joint's.
+struct FamilyFormulaVariable {
+  std::string name;
+  std::string description;  // what it is, in its unit (`kincal effects`)
+};
+
 struct Robot {
   std::string name;
   // One alternative per family (the registry line of this layer).
@@ -147,6 +155,15 @@ struct Robot {
 Robot load_robot(const std::string& name_or_path);
 bool is_builtin_robot(const std::string& name);
 Robot builtin_robot(const std::string& name);  // throws InputError if unknown
+
+// The numbers the robot's family offers its formula effects per joint (none
+// for the 6-UPS and the hybrid; the 6-RUS's `rod` and `lever`), and their
+// values at the nominal configuration of a commanded pose: values[k·6 + j]
+// for variable k, joint j + 1 (core's rus6_formula_joint_values: the
+// controller reads the same). False, `values` untouched, where the family's
+// IK fails at the pose.
+std::vector<FamilyFormulaVariable> family_formula_variables(const Robot& robot);
+bool family_formula_values(const Robot& robot, const Pose<double>& pose, double* values);
 
 // Parses a robot description from text; `file` names it in errors.
 Robot parse_robot(const std::string& text, const std::string& file);

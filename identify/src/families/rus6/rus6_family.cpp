@@ -5,6 +5,7 @@
 
 #include "families/description_reader.hpp"
 #include "families/table_words.hpp"
+#include "kincal/identify/joint_limits.hpp"
 #include "kincal/core/rus6_machine.hpp"
 #include "kincal/identify/rus6_error_model.hpp"
 
@@ -147,6 +148,19 @@ bool Rus6FamilyKinematics::forward_jacobian(const Robot& robot, const Pose<doubl
   Rus6Legs<double> legs;
   if (rus6_ik(robot.rus6(), pose, q, nullptr, &legs) != Status::Ok) return false;
   return rus6_forward_jacobian(robot.rus6(), legs, J) == Status::Ok && all_finite(J);
+}
+
+// core's rus6_formula_joint_values, which the controller evaluates too.
+std::vector<FamilyFormulaVariable> Rus6FamilyKinematics::formula_joint_variables() const {
+  return {{"rod", "the joint's rod length, mm (the nominal geometry's)"},
+          {"lever", "mm of rod per rad of crank at the commanded pose, u . (a x (C - s)) (rods longer by dl act as "
+                    "a joint error dl / lever)"}};
+}
+
+bool Rus6FamilyKinematics::formula_joint_values(const Robot& robot, const Pose<double>& pose, double* values) const {
+  // The commanded pose may lie past the limits (a measured row): the values
+  // are read on the geometry with its limits opened, as the node's own IK.
+  return rus6_formula_joint_values(without_limits(robot.rus6()), pose, values) == Status::Ok;
 }
 
 double Rus6FamilyKinematics::reach(const Robot& robot) const {

@@ -32,6 +32,8 @@ class Rus6FamilyKinematics final : public FamilyKinematics {
   double characteristic_length(const Robot& robot) const override { return robot.rus6().characteristic_length; }
   double reach(const Robot& robot) const override;
   std::unique_ptr<ActualMachine> actual_machine(const Robot& nominal, const Robot& actual) const override;
+  std::vector<FamilyFormulaVariable> formula_joint_variables() const override;
+  bool formula_joint_values(const Robot& robot, const Pose<double>& pose, double* values) const override;
 };
 
 class Rus6FamilyErrorModel final : public FamilyErrorModel {
