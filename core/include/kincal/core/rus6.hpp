@@ -55,6 +55,7 @@
 // the branch.
 #pragma once
 
+#include "kincal/core/atan2.hpp"
 #include "kincal/core/pose.hpp"
 #include "kincal/core/small_lu.hpp"
 #include "kincal/core/status.hpp"
@@ -238,9 +239,14 @@ Status rus6_forward_jacobian(const Rus6Geometry<Scalar>& g, const Rus6Legs<Scala
 }
 
 namespace rus6_detail {
-// x − 2π·k wrapped into [mid − π, mid + π).
+// x − 2π·k wrapped into [mid − π, mid + π). The IK's x is an atan2 less an
+// encoder offset, a turn at most from mid: one comparison each way, no
+// division or floor (the general form only past that).
 template <class Scalar> Scalar wrap_about(Scalar x, Scalar mid) {
   const Scalar two_pi = Scalar(2) * pi<Scalar>();
+  if (x < mid - pi<Scalar>()) x += two_pi;
+  else if (x >= mid + pi<Scalar>()) x -= two_pi;
+  if (x >= mid - pi<Scalar>() && x < mid + pi<Scalar>()) return x;
   return x - two_pi * std::floor((x - mid + pi<Scalar>()) / two_pi);
 }
 
@@ -319,12 +325,13 @@ template <class G, class Scalar> Status closed_form_commands(const G& g, const P
     //   cos θ = cos φ cos α − σ sin φ sin α = (A·C − σ B·S)/ρ²
     //   sin θ = sin φ cos α + σ cos φ sin α = (B·C + σ A·S)/ρ²
     // so one atan2 per branch (ρ² > 0 drops out), no acos, and a second
-    // atan2 only when the first branch tried is not the answer.
+    // atan2 only when the first branch tried is not the answer; libm's
+    // atan2 was two fifths of the IK (atan2.hpp: within an ulp of it).
     const Scalar S = std::sqrt(std::max(Scalar(0), rho2 - C * C));
     const Scalar lo = g.min_joint(i), hi = g.max_joint(i), mid = Scalar(0.5) * (lo + hi);
     const Scalar offset = g.joint_offset(i);
     auto branch_command = [&](Scalar sigma) {
-      return rus6_detail::wrap_about(std::atan2(B * C + sigma * A * S, A * C - sigma * B * S) - offset, mid);
+      return rus6_detail::wrap_about(atan2_rational(B * C + sigma * A * S, A * C - sigma * B * S) - offset, mid);
     };
     auto inside = [&](Scalar x) { return x >= lo && x <= hi; };
     // The rule at the top: a branch inside the limits, the home branch when
