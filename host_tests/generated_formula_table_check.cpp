@@ -25,6 +25,7 @@
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
+#include "generated_stream.hpp"
 #include KINCAL_GENERATED_TABLE
 
 namespace {
@@ -33,83 +34,30 @@ namespace ki = kincal::identify;
 using kincal::CompensationStatus;
 using kincal::Vec6;
 
-struct Point {
-  Vec6<double> pose;
-  double temp, time, spindle;
-};
+using kincal_test::StreamPoint;
 
-std::vector<Point> random_points(unsigned seed, int count) {
+std::vector<StreamPoint> random_points(unsigned seed, int count) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<Point> out;
+  std::vector<StreamPoint> out;
   for (int k = 0; k < count; ++k) {
-    Point p;
+    StreamPoint p;
     p.pose << 30 * u(rng), 30 * u(rng), 200 + 20 * u(rng), 0.08 * u(rng), 0.08 * u(rng), 0.12 * u(rng);
     // Every tenth pose far above the stroke: refused by both paths.
     if (k % 10 == 9) p.pose(2) = 400;
     p.temp = 22.5 + 7.5 * u(rng);
     p.time = 2.0 * k;
-    p.spindle = 25 + 7 * u(rng);
+    p.inputs = {25 + 7 * u(rng)};  // spindle_temp
     out.push_back(p);
   }
   return out;
 }
 
-ki::PoseTable pose_table(const std::vector<Point>& points) {
-  std::string csv = "id,x,y,z,rx,ry,rz,temp,time,spindle_temp\n";
-  char line[400];
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const Point& p = points[k];
-    std::snprintf(line, sizeof line, "P%03zu,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k, p.pose(0),
-                  p.pose(1), p.pose(2), p.pose(3), p.pose(4), p.pose(5), p.temp, p.time, p.spindle);
-    csv += line;
-  }
-  ki::PoseTableOptions options;
-  options.input_columns = {"spindle_temp"};
-  return ki::parse_pose_table(csv, "random_poses.csv", options);
-}
-
-// The generated header's compensator over the same stream, as `kincal
-// compensate` runs it: from the home command, or from zero where the home
-// pose cannot be compensated (a formula that reads a named input has none
-// there).
-template <class Scalar>
-std::vector<std::pair<CompensationStatus, Vec6<double>>> generated_commands(const std::vector<Point>& points) {
+template <class Scalar> kincal_test::StreamCommands generated_commands(const std::vector<StreamPoint>& points) {
   using Tables = kincal::generated::Tables<Scalar>;
   const kincal::Compensator<kincal::generated::Machine<Scalar>, kincal::generated::Formulas<Scalar>> c(
       Tables::calibration(), Tables::limits());
-  EXPECT_EQ(c.status(), CompensationStatus::Ok);
-  Vec6<Scalar> home = Vec6<Scalar>::Zero();
-  if (c.home_command(home) != CompensationStatus::Ok) home.setZero();
-  auto state = c.start(home);
-  std::vector<std::pair<CompensationStatus, Vec6<double>>> out;
-  for (const Point& p : points) {
-    kincal::NcPoint<Scalar> point;
-    point.pose = kincal::Pose<Scalar>::from_xyz_rpy(p.pose.cast<Scalar>());
-    point.temperature = Scalar(p.temp);
-    point.has_temperature = true;
-    point.time = Scalar(p.time);
-    Scalar inputs[kincal::kFormulaInputs] = {Scalar(p.spindle)};
-    point.inputs = inputs;
-    Vec6<Scalar> q = Vec6<Scalar>::Zero();
-    const CompensationStatus st = c.compensate(state, point, q);
-    out.emplace_back(st, st == CompensationStatus::Ok ? Vec6<double>(q.template cast<double>()) : Vec6<double>::Zero());
-  }
-  return out;
-}
-
-double compare(const ki::CompensatedStream& host, const std::vector<std::pair<CompensationStatus, Vec6<double>>>& gen,
-               int& compensated) {
-  double worst = 0;
-  compensated = 0;
-  EXPECT_EQ(host.rows.size(), gen.size());
-  for (std::size_t k = 0; k < gen.size() && k < host.rows.size(); ++k) {
-    EXPECT_EQ(gen[k].first, host.rows[k].status) << "pose " << k;
-    if (host.rows[k].status != CompensationStatus::Ok) continue;
-    ++compensated;
-    worst = std::max(worst, (gen[k].second - host.rows[k].q).cwiseAbs().maxCoeff());
-  }
-  return worst;
+  return kincal_test::stream_commands(c, points);
 }
 
 TEST(GeneratedFormulaTable, TheHeadersFormulasCompensateLikeTheHost) {
@@ -122,14 +70,14 @@ TEST(GeneratedFormulaTable, TheHeadersFormulasCompensateLikeTheHost) {
   static_assert(kincal::generated::kFormulaInputCount == 1, "one named input");
   EXPECT_STREQ(kincal::generated::kFormulaInputNames[0], "spindle_temp");
   const ki::CalibrationModel model = ki::read_model_file(KINCAL_FORMULA_MODEL);
-  const std::vector<Point> points = random_points(11, 80);
-  const ki::CompensatedStream host = ki::compensate_rows(ki::calibration_table(model), model, pose_table(points));
+  const std::vector<StreamPoint> points = random_points(11, 80);
+  const ki::CompensatedStream host = ki::compensate_rows(ki::calibration_table(model), model, kincal_test::stream_pose_table(points, {"spindle_temp"}));
 
   int compensated = 0;
-  const double worst_double = compare(host, generated_commands<double>(points), compensated);
+  const double worst_double = kincal_test::largest_difference(host, generated_commands<double>(points), compensated);
   EXPECT_GE(compensated, 70);  // the 8 poses above the stroke are refused
   EXPECT_LE(worst_double, 1e-9);
-  const double worst_float = compare(host, generated_commands<float>(points), compensated);
+  const double worst_float = kincal_test::largest_difference(host, generated_commands<float>(points), compensated);
   EXPECT_LE(worst_float, 1e-4);
   std::printf("generated formulas vs host over %d poses: double %.3g mm, float %.3g mm\n", compensated, worst_double,
               worst_float);
@@ -148,13 +96,13 @@ TEST(GeneratedFormulaTable, TheFormulasMoveTheCommands) {
       zeroed, Tables::limits());
   ASSERT_EQ(without.status(), CompensationStatus::Ok);
   double largest = 0;
-  for (const Point& p : random_points(3, 20)) {
+  for (const StreamPoint& p : random_points(3, 20)) {
     if (p.pose(2) > 300) continue;
     kincal::NcPoint<double> point;
     point.pose = kincal::Pose<double>::from_xyz_rpy(p.pose);
     point.temperature = p.temp;
     point.has_temperature = true;
-    double inputs[kincal::kFormulaInputs] = {p.spindle};
+    double inputs[kincal::kFormulaInputs] = {p.inputs[0]};
     point.inputs = inputs;
     Vec6<double> a, b;
     auto s1 = with.start(Vec6<double>::Zero());

@@ -28,6 +28,7 @@
 #include "kincal/identify/calibration_table.hpp"
 #include "kincal/identify/csv.hpp"
 #include "kincal/identify/model.hpp"
+#include "generated_stream.hpp"
 #include KINCAL_GENERATED_TABLE
 
 namespace {
@@ -36,18 +37,15 @@ namespace ki = kincal::identify;
 using kincal::CompensationStatus;
 using kincal::Vec6;
 
-struct Point {
-  Vec6<double> pose;
-  double temp;
-};
+using kincal_test::StreamPoint;
 
-std::vector<Point> random_points(unsigned seed, int count) {
+std::vector<StreamPoint> random_points(unsigned seed, int count) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const Vec6<double> home = kincal::make_rus6_ref<double>().home.to_xyz_rpy();
-  std::vector<Point> out;
+  std::vector<StreamPoint> out;
   for (int k = 0; k < count; ++k) {
-    Point p;
+    StreamPoint p;
     Vec6<double> d;
     d << 30 * u(rng), 30 * u(rng), 30 * u(rng), 0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng);
     p.pose = home + d;
@@ -58,42 +56,13 @@ std::vector<Point> random_points(unsigned seed, int count) {
   return out;
 }
 
-ki::PoseTable pose_table(const std::vector<Point>& points) {
-  std::string csv = "id,x,y,z,rx,ry,rz,temp\n";
-  char line[400];
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const Point& p = points[k];
-    std::snprintf(line, sizeof line, "P%03zu,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", k, p.pose(0), p.pose(1),
-                  p.pose(2), p.pose(3), p.pose(4), p.pose(5), p.temp);
-    csv += line;
-  }
-  return ki::parse_pose_table(csv, "random_poses.csv", ki::PoseTableOptions());
-}
-
 template <class Scalar>
 using GeneratedCompensator =
     kincal::Compensator<kincal::generated::Machine<Scalar>, kincal::generated::Formulas<Scalar>>;
 
-// The generated compensator over the stream, from the home command.
-template <class Scalar>
-std::vector<std::pair<CompensationStatus, Vec6<double>>> generated_commands(
-    const kincal::CalibrationTable<kincal::generated::Machine<Scalar>>& table, const std::vector<Point>& points) {
-  const GeneratedCompensator<Scalar> c(table, kincal::generated::Tables<Scalar>::limits());
-  EXPECT_EQ(c.status(), CompensationStatus::Ok);
-  Vec6<Scalar> home = Vec6<Scalar>::Zero();
-  EXPECT_EQ(c.home_command(home), CompensationStatus::Ok);
-  auto state = c.start(home);
-  std::vector<std::pair<CompensationStatus, Vec6<double>>> out;
-  for (const Point& p : points) {
-    kincal::NcPoint<Scalar> point;
-    point.pose = kincal::Pose<Scalar>::from_xyz_rpy(p.pose.cast<Scalar>());
-    point.temperature = Scalar(p.temp);
-    point.has_temperature = true;
-    Vec6<Scalar> q = Vec6<Scalar>::Zero();
-    const CompensationStatus st = c.compensate(state, point, q);
-    out.emplace_back(st, st == CompensationStatus::Ok ? Vec6<double>(q.template cast<double>()) : Vec6<double>::Zero());
-  }
-  return out;
+template <class Scalar> kincal_test::StreamCommands generated_commands(const std::vector<StreamPoint>& points) {
+  using Tables = kincal::generated::Tables<Scalar>;
+  return kincal_test::stream_commands(GeneratedCompensator<Scalar>(Tables::calibration(), Tables::limits()), points);
 }
 
 TEST(GeneratedRus6FormulaTable, TheFamilysNumbersReachTheGeneratedFormula) {
@@ -101,25 +70,16 @@ TEST(GeneratedRus6FormulaTable, TheFamilysNumbersReachTheGeneratedFormula) {
   static_assert(F::present && F::reads_family, "rod_thermal reads rod and lever");
   static_assert(!F::pose_twist && !F::reads_load && !F::reads_stream, "and nothing else the compensator computes");
   const ki::CalibrationModel model = ki::read_model_file(KINCAL_FORMULA_MODEL);
-  const std::vector<Point> points = random_points(23, 80);
-  const ki::CompensatedStream host = ki::compensate_rows(ki::calibration_table(model), model, pose_table(points));
+  const std::vector<StreamPoint> points = random_points(23, 80);
+  const ki::CompensatedStream host = ki::compensate_rows(ki::calibration_table(model), model, kincal_test::stream_pose_table(points));
   ASSERT_TRUE(host.home_ok);
 
   for (const bool single : {false, true}) {
-    const auto gen = single ? generated_commands<float>(kincal::generated::Tables<float>::calibration(), points)
-                            : generated_commands<double>(kincal::generated::Tables<double>::calibration(), points);
-    ASSERT_EQ(gen.size(), host.rows.size());
-    double worst = 0;
+    const kincal_test::StreamCommands gen = single ? generated_commands<float>(points) : generated_commands<double>(points);
     int compensated = 0;
-    for (std::size_t k = 0; k < gen.size(); ++k) {
-      EXPECT_EQ(gen[k].first, host.rows[k].status) << "pose " << k;
-      if (k % 10 == 9) {
-        EXPECT_NE(gen[k].first, CompensationStatus::Ok) << "pose " << k << " is out of reach";
-      }
-      if (host.rows[k].status != CompensationStatus::Ok || gen[k].first != CompensationStatus::Ok) continue;
-      ++compensated;
-      worst = std::max(worst, (gen[k].second - host.rows[k].q).cwiseAbs().maxCoeff());
-    }
+    const double worst = kincal_test::largest_difference(host, gen, compensated);
+    for (std::size_t k = 9; k < gen.size(); k += 10)
+      EXPECT_NE(gen[k].first, CompensationStatus::Ok) << "pose " << k << " is out of reach";
     EXPECT_EQ(compensated, 72);
     // double: the same numbers by two code paths; float: its rounding of
     // a ~1 rad command (a few 1e-7) through the IK and the fixed point.
@@ -138,7 +98,7 @@ TEST(GeneratedRus6FormulaTable, TheFormulaIsTheRodsLengthenedToFirstOrder) {
   ASSERT_EQ(c.status(), CompensationStatus::Ok);
   double worst = 0, largest_effect = 0;
   int compared = 0;
-  for (const Point& p : random_points(5, 40)) {
+  for (const StreamPoint& p : random_points(5, 40)) {
     if (p.pose(2) > 600) continue;
     const kincal::Pose<double> pose = kincal::Pose<double>::from_xyz_rpy(p.pose);
     kincal::NcPoint<double> point;
