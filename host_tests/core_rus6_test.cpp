@@ -425,10 +425,18 @@ TEST(CoreRus6, FormulaLeverIsTheIksSensitivityToTheRod) {
   for (int machine = 0; machine < 2; ++machine) {
     const Rus6Geometry<double> g = machine == 0 ? make_rus6_ref<double>() : make_custom_machine(nullptr);
     double worst = 0;
+    int used = 0;
     for (const auto& o : box_offsets(40, kBoxMm, kBoxRad, 71 + machine)) {
       const Pose<double> pose = offset_pose<double>(g.home, o.data());
       double values[12];
-      ASSERT_EQ(rus6_formula_joint_values(g, pose, values), Status::Ok);
+      // The values exist where the IK does: a corner of the box can lie a
+      // rounding past a joint limit (clang's Debug build), and then both
+      // say OutOfLimits.
+      Vec6<double> q = Vec6<double>::Zero();
+      const Status ik = rus6_ik(g, pose, q);
+      ASSERT_EQ(rus6_formula_joint_values(g, pose, values), ik);
+      if (ik != Status::Ok) continue;
+      ++used;
       for (int i = 0; i < 6; ++i) {
         EXPECT_EQ(values[i], g.rod_length(i));
         const double h = 1e-4;
@@ -443,6 +451,7 @@ TEST(CoreRus6, FormulaLeverIsTheIksSensitivityToTheRod) {
       }
     }
     EXPECT_LT(worst, 1e-6) << "machine " << machine;
+    EXPECT_GE(used, 90) << "machine " << machine;  // of 104 poses
   }
   // Out of reach: the IK's status, nothing written.
   const Rus6Geometry<double> g = make_rus6_ref<double>();
