@@ -64,7 +64,6 @@
 #endif
 #endif
 
-
 namespace kincal {
 
 // One NC point.
@@ -170,7 +169,12 @@ namespace compensation_detail {
 //                                       family has one and the table needs
 //                                       it, else in closed form (apart, so
 //                                       that the two are never on the
-//                                       controller's stack together).
+//                                       controller's stack together);
+//   Status formula_joint_values(pose, values) const
+//                                     — what the family offers formulas per
+//                                       joint at the nominal configuration
+//                                       (FormulaSlot::family_joint; called
+//                                       only for a policy that reads_family).
 // Step 2's payload is a weight and a centre of mass in the platform frame
 // (formula_effects.hpp); a family that takes it elsewhere says so.
 template <class Machine> struct Model;
