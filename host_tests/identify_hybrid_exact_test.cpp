@@ -40,6 +40,29 @@ Eigen::VectorXd random_errors(std::mt19937& rng, double length_mm, double angle_
   return e;
 }
 
+// The same with every S joint a ball, as identify writes its models (the
+// S axes' offsets dx_5_i, dy_5_i, dz_5_i and the last axis's tilts
+// dalpha_6_i, dbeta_6_i held at zero): the stored chains then close each
+// UPS limb on its ball's centre (close_ups_on_centre, three unknowns)
+// instead of its end frame (six). random_errors's machines take the
+// six-joint closure.
+Eigen::VectorXd ball_errors(std::mt19937& rng, double length_mm, double angle_rad) {
+  Eigen::VectorXd e = random_errors(rng, length_mm, angle_rad);
+  for (int i = 0; i < 3; ++i) {
+    const int limb = HybridErrorLayout::ups(i);
+    for (int k = 0; k < 3; ++k) e(limb + 6 + 5 * 4 + k) = 0;  // joint 4's translations
+    for (int k = 3; k < 5; ++k) e(limb + 6 + 5 * 5 + k) = 0;  // joint 5's tilts
+  }
+  return e;
+}
+
+enum class Balls { No, Yes };
+Eigen::VectorXd machine_errors(Balls balls, std::mt19937& rng, double length_mm, double angle_rad) {
+  return balls == Balls::Yes ? ball_errors(rng, length_mm, angle_rad) : random_errors(rng, length_mm, angle_rad);
+}
+bool every_limb_a_ball(const HybridChains<double>& c) { return c.ups_ball[0] && c.ups_ball[1] && c.ups_ball[2]; }
+bool no_limb_a_ball(const HybridChains<double>& c) { return !c.ups_ball[0] && !c.ups_ball[1] && !c.ups_ball[2]; }
+
 // A pose of the task workspace (500 × 500 × 120 mm about {R}'s origin), tilted
 // up to 0.15 rad about each axis.
 Pose<double> random_pose(std::mt19937& rng) {
@@ -112,10 +135,12 @@ TEST(HybridExact, InverseKinematicsInvertsTheErroneousMachine) {
   const HybridGeometry<double>& g = geometry();
   const kincal::identify::HybridErrorModel model(g);
   std::mt19937 rng(23);
+  for (const Balls balls : {Balls::No, Balls::Yes})
   for (const auto& [length, angle] : {std::pair{0.1, 3e-4}, std::pair{1.0, 2e-3}}) {
-    const Eigen::VectorXd errors = random_errors(rng, length, angle);
+    const Eigen::VectorXd errors = machine_errors(balls, rng, length, angle);
     HybridChains<double> c;
     ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+    ASSERT_TRUE(balls == Balls::Yes ? every_limb_a_ball(c) : no_limb_a_ball(c));
     double worst_p = 0, worst_r = 0;
     for (int n = 0; n < 100; ++n) {
       const Pose<double> pose = random_pose(rng);
@@ -127,26 +152,67 @@ TEST(HybridExact, InverseKinematicsInvertsTheErroneousMachine) {
       worst_p = std::max(worst_p, position_gap(reached, pose));
       worst_r = std::max(worst_r, rotation_gap(reached, pose));
     }
-    EXPECT_LT(worst_p, 1e-9) << length << " mm";
-    EXPECT_LT(worst_r, 1e-12) << length << " mm";
+    EXPECT_LT(worst_p, 1e-9) << length << " mm, balls " << int(balls);
+    EXPECT_LT(worst_r, 1e-12) << length << " mm, balls " << int(balls);
+  }
+}
+
+// Which limbs are balls (hybrid_ups_ball): a tilt of the S's last axis
+// with a displacement along it moves that axis off the centre; either alone
+// does not. Each classification is checked by its result: the IK's
+// commands put identify's nonlinear machine on the pose.
+TEST(HybridExact, ABallIsAnSWhoseAxesMeetInOnePoint) {
+  const HybridGeometry<double>& g = geometry();
+  const kincal::identify::HybridErrorModel model(g);
+  std::mt19937 rng(29);
+  const int last_axis = HybridErrorLayout::ups(0) + 6 + 5 * 5;  // limb 1's joint 5: dx, dy, dz, dalpha, dbeta
+  struct Case {
+    double dz, dalpha;
+    bool ball;
+  };
+  for (const Case k : {Case{0.4, 0.0, true}, Case{0.4, 1e-3, false}, Case{0.0, 1e-3, true}}) {
+    Eigen::VectorXd errors = ball_errors(rng, 0.5, 1e-3);
+    errors(last_axis + 2) = k.dz;
+    errors(last_axis + 3) = k.dalpha;
+    HybridChains<double> c;
+    ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
+    EXPECT_EQ(c.ups_ball[0], k.ball) << k.dz << " mm, " << k.dalpha << " rad";
+    EXPECT_TRUE(c.ups_ball[1] && c.ups_ball[2]);
+    for (int n = 0; n < 30; ++n) {
+      const Pose<double> pose = random_pose(rng);
+      Vec6<double> q;
+      ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, q), Status::Ok) << "pose " << n;
+      Pose<double> reached;
+      ASSERT_EQ(model.actual_fk(errors, q, g.home, reached).status, Status::Ok);
+      EXPECT_LT(position_gap(reached, pose), 1e-9) << k.dz << " mm, " << k.dalpha << " rad, pose " << n;
+    }
   }
 }
 
 // The controller's form, which builds each chain from the table's numbers
-// where it needs it (no stored chains), gives the stored form's commands.
+// where it needs it (no stored chains) and closes every UPS limb on its end
+// frame (six joints), gives the stored form's commands — also where the
+// stored form closes a ball's limb on its centre (three joints).
 TEST(HybridExact, TheTableFormEqualsTheStoredChains) {
   const HybridGeometry<double>& g = geometry();
   std::mt19937 rng(41);
-  Eigen::VectorXd errors = random_errors(rng, 0.5, 1e-3);
+  for (const Balls balls : {Balls::No, Balls::Yes}) {
+  Eigen::VectorXd errors = machine_errors(balls, rng, 0.5, 1e-3);
   const Eigen::VectorXd encoder = random_errors(rng, 0.2, 5e-4).head<6>();
   HybridChains<double> c;
   ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c, encoder.data()), Status::Ok);
+  ASSERT_TRUE(balls == Balls::Yes ? every_limb_a_ball(c) : no_limb_a_ball(c));
   for (int n = 0; n < 50; ++n) {
     const Pose<double> pose = random_pose(rng);
     Vec6<double> stored, from_table;
     ASSERT_EQ(kincal::hybrid_exact_ik(g, c, pose, stored), Status::Ok);
     ASSERT_EQ(kincal::hybrid_exact_ik(g, kUpSplit, errors.data(), encoder.data(), pose, from_table), Status::Ok);
-    EXPECT_LT((stored - from_table).cwiseAbs().maxCoeff(), 1e-12) << "pose " << n;
+    // The same Newton on the same chains agrees to rounding; the two
+    // closures of a ball's limb each stop within HybridExactTolerance's
+    // 1e-10 mm of the solution.
+    const double agree = balls == Balls::Yes ? 1e-9 : 1e-12;
+    EXPECT_LT((stored - from_table).cwiseAbs().maxCoeff(), agree) << "pose " << n << ", balls " << int(balls);
+  }
   }
 }
 
@@ -161,8 +227,9 @@ TEST(HybridExact, AStreamStartsFromItsLastPoint) {
   const kincal::identify::HybridErrorModel model(g);
   std::mt19937 rng(67);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (const Balls balls : {Balls::No, Balls::Yes})
   for (const auto& [length, angle] : {std::pair{0.1, 3e-4}, std::pair{1.0, 2e-3}}) {
-    const Eigen::VectorXd errors = random_errors(rng, length, angle);
+    const Eigen::VectorXd errors = machine_errors(balls, rng, length, angle);
     HybridChains<double> c;
     ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
     kincal::HybridExactWarmStart<double> warm;
@@ -191,8 +258,8 @@ TEST(HybridExact, AStreamStartsFromItsLastPoint) {
       worst_p = std::max(worst_p, position_gap(reached, pose));
       EXPECT_LT(rotation_gap(reached, pose), 1e-12) << n;
     }
-    EXPECT_LT(worst_q, 1e-9) << length << " mm";
-    EXPECT_LT(worst_p, 1e-9) << length << " mm";
+    EXPECT_LT(worst_q, 1e-9) << length << " mm, balls " << int(balls);
+    EXPECT_LT(worst_p, 1e-9) << length << " mm, balls " << int(balls);
     // The near points did start from the last one (a jump and the first
     // point did not): every closure of each.
     EXPECT_EQ(warm.serial.reused, std::uint32_t(near));
@@ -236,12 +303,14 @@ TEST(HybridExact, FloatFollowsDouble) {
   const HybridGeometry<double>& g = geometry();
   const HybridGeometry<float> gf = g.cast<float>();
   std::mt19937 rng(3);
-  const Eigen::VectorXd errors = random_errors(rng, 1.0, 2e-3);
+  for (const Balls balls : {Balls::No, Balls::Yes}) {
+  const Eigen::VectorXd errors = machine_errors(balls, rng, 1.0, 2e-3);
   const Eigen::VectorXf errors_f = errors.cast<float>();
   HybridChains<double> c;
   HybridChains<float> cf;
   ASSERT_EQ(kincal::hybrid_exact_chains(g, kUpSplit, errors.data(), c), Status::Ok);
   ASSERT_EQ(kincal::hybrid_exact_chains(gf, float(kUpSplit), errors_f.data(), cf), Status::Ok);
+  ASSERT_EQ(cf.ups_ball[0], balls == Balls::Yes);
   for (int n = 0; n < 50; ++n) {
     const Pose<double> pose = random_pose(rng);
     Vec6<double> q;
@@ -251,6 +320,7 @@ TEST(HybridExact, FloatFollowsDouble) {
     // float rounding of 1 m chains: ~1e-4 mm per chain, the wrist in rad.
     EXPECT_LT((qf.cast<double>() - q).head<3>().cwiseAbs().maxCoeff(), 2e-3) << "pose " << n;
     EXPECT_LT((qf.cast<double>() - q).tail<3>().cwiseAbs().maxCoeff(), 2e-5) << "pose " << n;
+  }
   }
 }
 

@@ -3,10 +3,17 @@
 // CalibrationTable, and the NC points the compensator is fed.
 //
 //   hybrid: hybrid-seed000 with seed 000's encoder offsets (the sizes of
-//     examples/hybrid-seed000/errors.csv) and all 144 structural errors
-//     non-zero (uniform ±1e-4, mm or rad: every term of B·Δχ̂ counts), so
-//     every point runs the full Eq. (16) path; "+effects" adds scale,
-//     backlash, compliance, cyclic and thermal (with a temperature input).
+//     examples/hybrid-seed000/errors.csv) and the structural errors
+//     non-zero (uniform ±1e-4, mm or rad) except, with `balls`, those
+//     identify holds on every design it documents: the S joints' axis
+//     offsets (dx_5_i, dy_5_i, dz_5_i) and last-axis tilts (dalpha_6_i,
+//     dbeta_6_i), so each S stays a ball and the compensator closes its limb
+//     on the ball's centre (core/hybrid_exact.hpp close_ups_on_centre);
+//     without `balls` all 150 are non-zero and every limb takes the
+//     six-joint closure (a model with S offsets, as examples/firmware/
+//     model.json, identified before those were held). "+effects" adds
+//     scale, backlash, compliance, cyclic and thermal (with a temperature
+//     input).
 //   6-UPS: stewart-seed001 with a calibrated geometry (every hinge and leg
 //     length off by up to 50 µm); "+effects" as above.
 // The points cycle through 8 poses around bench_cases.hpp's target, so the
@@ -38,7 +45,7 @@ template <class Machine> CalibrationTable<Machine> add_effects(CalibrationTable<
   return seal_table(t);
 }
 
-inline HybridCalibrationTable<double> hybrid_full_model(bool effects) {
+inline HybridCalibrationTable<double> hybrid_full_model(bool effects, bool balls = true) {
   const HybridGeometry<double> g = make_hybrid_seed000<double>();
   EffectParameters<double> frame;
   frame.load_direction = g.workpiece_rotation * Vec3<double>(0, 0, -1);
@@ -49,6 +56,11 @@ inline HybridCalibrationTable<double> hybrid_full_model(bool effects) {
   for (int i = 0; i < 6; ++i) t.machine.encoder_offsets[i] = xi[i];
   unsigned s = 12345u;
   for (int k = 6; k < kHybridSourceErrorCount; ++k) t.machine.source_errors[k] = lcg_uniform(s, -1e-4, 1e-4);
+  for (int i = 0; i < 3 && balls; ++i) {
+    double* eta = t.machine.source_errors + HybridErrorLayout::ups(i);
+    for (int k = 0; k < 3; ++k) eta[6 + 5 * 4 + k] = 0.0;  // joint 4's translations
+    for (int k = 3; k < 5; ++k) eta[6 + 5 * 5 + k] = 0.0;  // joint 5's tilts
+  }
   t = seal_table(t);
   return effects ? add_effects(t) : t;
 }

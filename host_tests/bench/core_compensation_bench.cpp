@@ -50,8 +50,17 @@ template <class S> void BM_CompensateHybrid(benchmark::State& state) {
 template <class S> void BM_CompensateHybridPath(benchmark::State& state) {
   run(state, table_cast<S>(hybrid_full_model(false)), false, true);
 }
+template <class S> void BM_CompensateHybridOffsetS(benchmark::State& state) {
+  run(state, table_cast<S>(hybrid_full_model(false, false)), false);
+}
+template <class S> void BM_CompensateHybridOffsetSPath(benchmark::State& state) {
+  run(state, table_cast<S>(hybrid_full_model(false, false)), false, true);
+}
 template <class S> void BM_CompensateHybridEffects(benchmark::State& state) {
   run(state, table_cast<S>(hybrid_full_model(true)), true);
+}
+template <class S> void BM_CompensateHybridEffectsPath(benchmark::State& state) {
+  run(state, table_cast<S>(hybrid_full_model(true)), true, true);
 }
 template <class S> void BM_CompensateStewart(benchmark::State& state) {
   run(state, table_cast<S>(stewart_full_model(false)), false);
@@ -93,8 +102,12 @@ BENCHMARK_TEMPLATE(BM_CompensateHybrid, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybrid, float);
 BENCHMARK_TEMPLATE(BM_CompensateHybridPath, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybridPath, float);
+BENCHMARK_TEMPLATE(BM_CompensateHybridOffsetS, double);
+BENCHMARK_TEMPLATE(BM_CompensateHybridOffsetSPath, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybridEffects, double);
 BENCHMARK_TEMPLATE(BM_CompensateHybridEffects, float);
+BENCHMARK_TEMPLATE(BM_CompensateHybridEffectsPath, double);
+BENCHMARK_TEMPLATE(BM_CompensateHybridEffectsPath, float);
 BENCHMARK_TEMPLATE(BM_CompensateStewart, double);
 BENCHMARK_TEMPLATE(BM_CompensateStewart, float);
 BENCHMARK_TEMPLATE(BM_CompensateStewartEffects, double);

@@ -17,7 +17,9 @@
 //                    chain (θ1, θ2, c − e, θ4, θ5, θ6), solved by Newton from
 //                    the nominal closed form; then each UPS limb (U, P, S: six
 //                    joints) is closed on its platform attachment by a 6 × 6
-//                    Newton, whose prismatic variable is the leg's length.
+//                    Newton, whose prismatic variable is the leg's length
+//                    (on the host, a limb whose S is a ball by a 3 × 3 one
+//                    on the ball's centre: close_ups_on_centre).
 //   hybrid_exact_fk  the pose for commands: Newton on the UP passive (θ1, θ2, c)
 //                    so that each closed UPS limb's length equals its command
 //                    (identify's HybridErrorModel::actual_fk, the "truth").
@@ -70,6 +72,15 @@ template <class Scalar> struct HybridUpsLimb {
   Mat3<Scalar> axes;               // the reference end frame's axes [t, u × t, u]
 };
 
+// A UPS limb's U and P as close_ups_on_centre evaluates them, where its S
+// joint is a ball (hybrid_ups_ball): the leg's centre is
+// C = p1 + R1·Rz(x1)·(b + x2·d) (close_ups_on_centre).
+template <class S> struct HybridUpsCentreChain {
+  Pose<S> first;   // base·link[0]: joint 0's frame
+  Vec3<S> b, d;    // link[2].p + link[2].R·link[3].p, link[2].R·z
+  Vec3<S> centre;  // the ball's centre in the platform frame
+};
+
 // The five chains of the hybrid (identify's HybridErrorModel chains 0–4),
 // held for the host (identify, `kincal compensate` through the
 // compensator's stored form); a controller builds each chain when it needs
@@ -77,6 +88,11 @@ template <class Scalar> struct HybridUpsLimb {
 // do not fit its static RAM).
 template <class Scalar> struct HybridChains {
   HybridUpsLimb<Scalar> ups[3];
+  // Where UPS limb i's S joint is a ball (hybrid_ups_ball), its U and P
+  // and the ball's centre on the platform, for the IK's closure on the
+  // centre alone (close_ups_on_centre).
+  bool ups_ball[3] = {false, false, false};
+  HybridUpsCentreChain<Scalar> ups_centre[3];
   HybridSerialLinks<Scalar> up;     // U (2 R), P: from {R0} to the platform frame (at A64)
   HybridSerialLinks<Scalar> wrist;  // 3 R from the platform frame to the tool frame at P
   Vec6<Scalar> joint_offset = Vec6<Scalar>::Zero();  // physical − commanded (nominal + Δξ)
@@ -445,6 +461,31 @@ void build_serial_chains(const HybridGeometry<S>& g, S up_split, const S* up_eta
   }
 }
 
+// Whether UPS limb i's S joint is a ball — its three axes through one
+// point, the centre — in the chains built from its Δη block `eta` (null:
+// nominal), and if so that centre in the limb's end frame (`centre_in_end`).
+// The S axes are joints 3, 4, 5. Joint 4's translations (dx_5_i, dy_5_i,
+// dz_5_i) would move its axis off joint 3's; joint 5's Δz (dz_6_i) lies
+// along its own axis unless Δα, Δβ tilt that axis (dalpha_6_i, dbeta_6_i).
+// Its Δx, Δy act after its motion (fold_errors' `centre_on_end`), on the
+// end frame. So with joint 4's translations zero and joint 5 not both moved
+// along and tilted, the centre sits at (Δx, Δy, Δz) of joint 5 in the end
+// frame: T_end = F·link5·Rz(x5)·Trans(Δx, Δy, 0), F's origin the centre and
+// F·link5's offset (0, 0, Δz) along T_end's own z (link5's rotation is the
+// nominal one). Identification holds exactly these (docs/
+// hybrid-error-model.md §3: they are not identifiable, or tried last and held),
+// so every model identify writes on the documented designs has balls.
+template <class S> bool hybrid_ups_ball(const S* eta, Vec3<S>& centre_in_end) {
+  centre_in_end.setZero();
+  if (eta == nullptr) return true;
+  const S* joint4 = eta + 6 + 5 * 4;  // (Δx, Δy, Δz, Δα, Δβ)
+  const S* joint5 = eta + 6 + 5 * 5;
+  if (joint4[0] != S(0) || joint4[1] != S(0) || joint4[2] != S(0)) return false;
+  if (joint5[2] != S(0) && (joint5[3] != S(0) || joint5[4] != S(0))) return false;
+  centre_in_end = Vec3<S>(joint5[0], joint5[1], joint5[2]);
+  return true;
+}
+
 // Whether Δχ (and the extra encoder offsets, if given) are all finite.
 template <class S> bool finite_source_errors(const S* source_errors, const S* encoder_offsets) {
   for (int k = 0; k < HybridErrorLayout::size(); ++k)
@@ -473,7 +514,18 @@ Status hybrid_exact_chains(const HybridGeometry<S>& g, S up_split, const S* sour
                            const S* encoder_offsets = nullptr) {
   if (source_errors != nullptr && !finite_source_errors(source_errors, encoder_offsets)) return Status::InvalidInput;
   const S* chi = source_errors;
-  for (int i = 0; i < 3; ++i) build_ups_limb(g, i, chi != nullptr ? chi + HybridErrorLayout::ups(i) : nullptr, out.ups[i]);
+  for (int i = 0; i < 3; ++i) {
+    const S* eta = chi != nullptr ? chi + HybridErrorLayout::ups(i) : nullptr;
+    HybridUpsLimb<S>& limb = out.ups[i];
+    build_ups_limb(g, i, eta, limb);
+    Vec3<S> centre_in_end;
+    out.ups_ball[i] = hybrid_ups_ball(eta, centre_in_end);
+    HybridUpsCentreChain<S>& leg = out.ups_centre[i];
+    leg.centre = limb.attach.p - limb.attach.R * centre_in_end;  // the end frame's R is the attachment's
+    leg.first = limb.links.base * limb.links.link[0];
+    leg.b = limb.links.link[2].p + limb.links.link[2].R * limb.links.link[3].p;
+    leg.d = limb.links.link[2].R.col(2);
+  }
   build_serial_chains(g, up_split, chi != nullptr ? chi + HybridErrorLayout::up() : nullptr,
                       chi != nullptr ? chi + HybridErrorLayout::wrist() : nullptr,
                       chi != nullptr ? chi + HybridErrorLayout::tool() : nullptr, out.up, out.wrist);
@@ -512,6 +564,7 @@ template <class S> struct HybridExactClosureStart {
   bool valid = false;
   S x[6] = {}, sine[6] = {}, cosine[6] = {};  // the solution (revolute joints also as sine and cosine)
   SmallLu<S, 6> lu;     // the Jacobian there (or one step before)
+  SmallLu<S, 3> lu3;    // the same for a ball's limb, closed on its centre (close_ups_on_centre)
   bool factorised = false;  // whether `lu` is factorised yet (close_serial's `factorised`)
   Pose<S> target;                             // what the chain was closed on, in {R0}
   std::uint32_t reused = 0;                   // closures started here (a diagnostic, and the tests')
@@ -730,6 +783,119 @@ Status close_ups(const HybridUpsLimb<S>& limb, const Pose<S>& platform, S L, S& 
   return s;
 }
 
+// A UPS limb whose S joint is a ball (hybrid_ups_ball) closed on its centre
+// (in {R0}) alone. The centre is a point of the platform, and the leg from
+// the U to it is the U (two R) and the P: three unknowns, not the six of
+// close_ups's end frame, since the S angles never move the centre. It
+// solves the same chain, so it is as exact as the six-joint closure (the
+// host's stored form only; docs/benchmarks.md).
+//   C(x) = p1 + R1·Rz(x1)·(b + x2·d),  R1 = F·Rz(x0)·link[1].R,
+//   p1 = F.p + F.R·Rz(x0)·link[1].p,   F = base·link[0] (`first`),
+// b = link[2].p + link[2].R·link[3].p and d = link[2].R·z (the P axis in
+// joint 1's frame; HybridUpsCentreChain). Newton on (x0, x1, x2), columns
+// a_j × (C − p_j) for the R joints (scaled by 1/L as in close_serial) and
+// the P axis, with close_serial's stopping rules.
+
+// C at (x2, sines, cosines), and the columns of its Jacobian (unscaled).
+template <class S>
+Vec3<S> ups_centre_at(const HybridUpsLimb<S>& limb, const HybridUpsCentreChain<S>& chain, S x2, const S* sine,
+                      const S* cosine, Mat3<S>& J) {
+  Mat3<S> M = chain.first.R;  // F.R·Rz(x0)
+  turn_about_z(M, sine[0], cosine[0]);
+  const Pose<S>& link1 = limb.links.link[1];
+  const Vec3<S> p1 = chain.first.p + M * link1.p;
+  const Vec3<S> a1 = M * link1.R.col(2);
+  const auto rz1 = [&](const Vec3<S>& v) {
+    return Vec3<S>(cosine[1] * v(0) - sine[1] * v(1), sine[1] * v(0) + cosine[1] * v(1), v(2));
+  };
+  const Vec3<S> a2 = M * (link1.R * rz1(chain.d));
+  const Vec3<S> C = p1 + M * (link1.R * rz1(chain.b)) + x2 * a2;
+  J.col(0) = chain.first.R.col(2).cross(C - chain.first.p);
+  J.col(1) = a1.cross(C - p1);
+  J.col(2) = a2;
+  return C;
+}
+
+// From `warm` if given, valid and within kHybridWarmReach of its last
+// centre: its first step from the kept factorisation and the known residual
+// (the centre's move), as close_from_previous; otherwise from the nominal
+// closed form on the centre (nominal_ups_start's leg direction). The
+// solution and the last factorisation are kept in `warm`.
+template <class S>
+Status close_ups_on_centre(const HybridUpsLimb<S>& limb, const HybridUpsCentreChain<S>& chain,
+                           const Pose<S>& platform, S L, S& length, HybridExactClosureStart<S>* warm) {
+  const Vec3<S> centre = platform.p + platform.R * chain.centre;
+  S x2, sine[2], cosine[2];
+  SmallLu<S, 3> local;
+  SmallLu<S, 3>& lu = warm != nullptr ? warm->lu3 : local;
+  S previous = S(0);
+  const auto step = [&](const Vec3<S>& e) {
+    const Vec3<S> dy = lu.solve(e);
+    for (int j = 0; j < 2; ++j) {
+      S sd, cd;
+      if (!step_sin_cos(dy(j) / L, sd, cd)) return false;
+      const S s = sine[j], c = cosine[j];
+      sine[j] = s * cd + c * sd;
+      cosine[j] = c * cd - s * sd;
+    }
+    x2 += dy(2);
+    return true;
+  };
+  bool warmed = false, factored = false;
+  if (warm != nullptr && warm->valid) {
+    warm->valid = false;
+    const Vec3<S> e = centre - warm->target.p;
+    if (e.cwiseAbs().maxCoeff() <= kHybridWarmReach<S>) {
+      previous = e.cwiseAbs().maxCoeff();
+      x2 = warm->x[2];
+      for (int j = 0; j < 2; ++j) sine[j] = warm->sine[j], cosine[j] = warm->cosine[j];
+      if (!step(e)) return Status::NotConverged;
+      warmed = factored = true;
+    }
+  }
+  if (!warmed) {  // the nominal U-P: the leg's direction about the reference axes
+    Vec3<S> v = limb.axes.transpose() * (centre - limb.origin);
+    x2 = v.norm();
+    if (!(x2 > S(0))) return Status::Unreachable;
+    v /= x2;
+    const S one(1);
+    cosine[1] = direction(-v(1), v(2), sine[0], cosine[0]);
+    sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);
+  }
+  for (int it = warmed ? 1 : 0;; ++it) {
+    Mat3<S> J;
+    const Vec3<S> e = centre - ups_centre_at(limb, chain, x2, sine, cosine, J);
+    const S err = e.cwiseAbs().maxCoeff();
+    if (!(err == err)) return Status::NotConverged;
+    bool closed = err <= HybridExactTolerance<S>::closure ||
+                  (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous);
+    if (!closed) {
+      if (it >= HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
+      J.col(0) /= L;
+      J.col(1) /= L;
+      if (!lu.factor(J) || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
+      factored = true;
+      if (!step(e)) return Status::NotConverged;
+      // close_serial's rule: quadratic convergence seen, the next residual
+      // (err³ / previous²) below the tolerance — closed without evaluating.
+      closed = it > 0 && err < S(0.01) * previous &&
+               err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure;
+      previous = err;
+    }
+    if (closed) {
+      length = x2;
+      if (warm != nullptr && factored) {  // a start needs a factorisation to step from
+        warm->x[2] = x2;
+        for (int j = 0; j < 2; ++j) warm->sine[j] = sine[j], warm->cosine[j] = cosine[j];
+        warm->target.p = centre;
+        warm->valid = true;
+        if (warmed) ++warm->reused;
+      }
+      return Status::Ok;
+    }
+  }
+}
+
 // The nominal machine's configuration at a tool pose as the serial chain's
 // start (θ1, θ2, c − e, θ4, θ5, θ6), with its revolute joints' sines and
 // cosines for close_serial (from the atan2 arguments, not a sin_cos of each
@@ -860,9 +1026,13 @@ Status hybrid_exact_ik(const HybridGeometry<S>& nominal, const HybridChains<S>& 
   }
   Vec6<S> physical;
   for (int i = 0; i < 3; ++i) {
-    SmallLu<S, 6> lu;
-    s = close_ups<true>(c.ups[i], platform, nominal.characteristic_length, physical(i), lu, false,
-                  warm != nullptr ? &warm->ups[i] : nullptr);
+    HybridExactClosureStart<S>* w = warm != nullptr ? &warm->ups[i] : nullptr;
+    if (c.ups_ball[i]) {
+      s = close_ups_on_centre(c.ups[i], c.ups_centre[i], platform, nominal.characteristic_length, physical(i), w);
+    } else {
+      SmallLu<S, 6> lu;
+      s = close_ups<true>(c.ups[i], platform, nominal.characteristic_length, physical(i), lu, false, w);
+    }
     if (s != Status::Ok) return s;
   }
   for (int j = 0; j < 3; ++j) physical(3 + j) = x[3 + j];
