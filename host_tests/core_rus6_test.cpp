@@ -34,6 +34,10 @@ template Status rus6_ik<Rus6Geometry<double>, double>(const Rus6Geometry<double>
                                 Rus6Legs<double>*);
 template Status rus6_ik<Rus6Geometry<float>, float>(const Rus6Geometry<float>&, const Pose<float>&, Vec6<float>&, Mat6<float>*,
                                Rus6Legs<float>*);
+template Status rus6_ik<Rus6Geometry<double>, double>(const Rus6Geometry<double>&, const Pose<double>&, Vec6<double>&,
+                                                      Mat6<double>*, double*);
+template Status rus6_ik<Rus6Geometry<float>, float>(const Rus6Geometry<float>&, const Pose<float>&, Vec6<float>&,
+                                                    Mat6<float>*, float*);
 template FkReport<double> rus6_fk<double>(const Rus6Geometry<double>&, const Vec6<double>&, const Pose<double>&,
                                           Pose<double>&, const FkOptions<double>&);
 template FkReport<float> rus6_fk<float>(const Rus6Geometry<float>&, const Vec6<float>&, const Pose<float>&,
@@ -448,6 +452,16 @@ TEST(CoreRus6, FormulaLeverIsTheIksSensitivityToTheRod) {
         ASSERT_EQ(rus6_ik(shorter, pose, qm), Status::Ok);
         const double dq_dl = (qp(i) - qm(i)) / (2 * h);
         worst = std::max(worst, std::abs(dq_dl * values[6 + i] + 1));
+      }
+      // The compensator takes the levers from its nominal IK's Jacobian
+      // (rus6_ik's `levers`) instead: the same numbers, to the bit, or a
+      // controller and the host's identification would read different ones.
+      Mat6<double> J;
+      double levers[6] = {};
+      Vec6<double> q_with = Vec6<double>::Zero();
+      if (rus6_ik(g, pose, q_with, &J, levers) == Status::Ok) {
+        EXPECT_EQ(q_with, q);
+        for (int i = 0; i < 6; ++i) EXPECT_EQ(levers[i], values[6 + i]) << "joint " << i;
       }
     }
     EXPECT_LT(worst, 1e-6) << "machine " << machine;

@@ -253,6 +253,8 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
   const Robot open = without_limits(robot);
   const Family& family = family_of(open);
   std::vector<std::optional<EffectNode>> nodes(table.rows.size());
+  const std::size_t family_value_count =
+      robot.formula_effects.empty() ? 0 : family_formula_variables(robot).size() * 6;
   for (std::size_t k = 0; k < table.rows.size(); ++k) {
     const PoseRow& row = table.rows[k];
     EffectNode n;
@@ -268,6 +270,10 @@ std::vector<std::optional<EffectNode>> effect_nodes(const Robot& robot, const Po
     for (const std::string& in : robot.formula_inputs) {
       const auto it = row.inputs.find(in);
       n.formula_inputs.push_back(it != row.inputs.end() ? it->second : std::numeric_limits<double>::quiet_NaN());
+    }
+    if (family_value_count > 0) {
+      n.family_values.assign(family_value_count, std::numeric_limits<double>::quiet_NaN());
+      family_formula_values(robot, n.pose, n.family_values.data());
     }
     nodes[k] = n;
   }

@@ -133,8 +133,12 @@ std::vector<double> formula_variables(const Robot& robot, const EffectNode& node
   if (!offered.empty()) {
     // Where the family cannot give them (its IK fails at the pose), NaN:
     // a formula that reads them is then refused at this node, by name.
-    std::vector<double> values(offered.size() * 6, std::numeric_limits<double>::quiet_NaN());
-    family_formula_values(robot, node.pose, values.data());
+    // The node's own copy where effect_nodes kept one (the same call).
+    std::vector<double> values = node.family_values;
+    if (values.size() != offered.size() * 6) {
+      values.assign(offered.size() * 6, std::numeric_limits<double>::quiet_NaN());
+      family_formula_values(robot, node.pose, values.data());
+    }
     for (int k = 0; k < lay.family_joint_count; ++k)
       for (int j = 1; j <= 6; ++j) v[std::size_t(lay.family_joint(k, j))] = values[std::size_t(k * 6 + j - 1)];
   }

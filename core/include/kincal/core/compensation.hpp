@@ -157,11 +157,16 @@ namespace compensation_detail {
 //   bool load(const Machine&)         — the copies (false: unusable values);
 //   Pose home_pose() const            — the pose home_command() compensates;
 //   Status nominal_configuration(pose, q_nom, need_load, g, load,
-//       payload_weight, payload_com, payload_load) const
+//       payload_weight, payload_com, payload_load, family_values) const
 //                                     — step 2: q_nom, the singularity test,
 //                                       the static load of a unit weight
 //                                       along g (if need_load) and of the
-//                                       formulas' payload (if payload_load);
+//                                       formulas' payload (if payload_load),
+//                                       and what the family offers formulas
+//                                       per joint there (if family_values:
+//                                       FormulaSlot::family_joint, only for
+//                                       a policy that reads_family; a family
+//                                       that offers nothing ignores it);
 //   bool exact() const, Status solve_exact(target, q*, warm) const,
 //   Status solve_closed_form(target, q*) const
 //                                     — step 4: the geometry's IK, by an
@@ -170,11 +175,6 @@ namespace compensation_detail {
 //                                       it, else in closed form (apart, so
 //                                       that the two are never on the
 //                                       controller's stack together);
-//   Status formula_joint_values(pose, values) const
-//                                     — what the family offers formulas per
-//                                       joint at the nominal configuration
-//                                       (FormulaSlot::family_joint; called
-//                                       only for a policy that reads_family).
 // Step 2's payload is a weight and a centre of mass in the platform frame
 // (formula_effects.hpp); a family that takes it elsewhere says so.
 template <class Machine> struct Model;
@@ -216,7 +216,7 @@ template <class S> struct Model<StewartMachine<S>> {
   // q_nom, and the static load (J_ikᵀ·τ = (F, 0), as identify's nodes).
   template <bool kPayload>
   Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
-                               S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load) const {
+                               S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load, S*) const {
     Mat6<S> J;
     const Status s = stewart_ik(nominal, pose, nominal_q, &J);
     if (s != Status::Ok) return s;
@@ -231,9 +231,6 @@ template <class S> struct Model<StewartMachine<S>> {
     return solve_closed_form(target, ideal);
   }
   Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return stewart_ik(calibrated, target, ideal); }
-
-  // The family offers its formulas no per-joint numbers.
-  Status formula_joint_values(const Pose<S>&, S*) const { return Status::Ok; }
 };
 
 template <class S> struct Model<HybridMachine<S>> {
@@ -278,7 +275,7 @@ template <class S> struct Model<HybridMachine<S>> {
   template <bool kPayload>
   Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
                                [[maybe_unused]] S payload_weight, const Vec3<S>&,
-                               [[maybe_unused]] Vec6<S>* payload_load) const {
+                               [[maybe_unused]] Vec6<S>* payload_load, S*) const {
     HybridFrames<S> f;
     Vec3<S> angles;
     Status s = hybrid_frames_at_pose(nominal, pose, f, angles);
@@ -305,9 +302,6 @@ template <class S> struct Model<HybridMachine<S>> {
 #endif
   }
   Status solve_closed_form(const Pose<S>& target, Vec6<S>& ideal) const { return hybrid_ik(controller, target, ideal); }
-
-  // The family offers its formulas no per-joint numbers.
-  Status formula_joint_values(const Pose<S>&, S*) const { return Status::Ok; }
 };
 
 }  // namespace compensation_detail
@@ -544,14 +538,12 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
       // Only what the machine's formulas read is computed (the policy's
       // compile-time flags: a generated policy knows; the host's says all).
       Vec6<Scalar> payload_load = Vec6<Scalar>::Zero();
+      Scalar* family_values = nullptr;
+      if constexpr (Formulas::reads_family) family_values = vars.v + FormulaSlot::family_joint;
       const CompensationStatus st =
-          prepare(pose, temperature, nominal_q, load, target, &payload_load);
+          prepare(pose, temperature, nominal_q, load, target, &payload_load, family_values);
       if (st != CompensationStatus::Ok) return st;
       if constexpr (Formulas::reads_load) vars.set_loads(payload_load);
-      if constexpr (Formulas::reads_family) {
-        const Status fs = model_.formula_joint_values(pose, vars.v + FormulaSlot::family_joint);
-        if (fs != Status::Ok) return to_compensation_status(fs);
-      }
       if constexpr (Formulas::pose_twist) {
         if (formulas_.has_pose()) {
           vars.set_joints(nominal_q);
@@ -598,13 +590,15 @@ template <class Machine, class Formulas = NoFormulaEffects> class Compensator {
   // before the thermal pre-scaling, which geometry() then applies.
   KINCAL_NOINLINE CompensationStatus prepare(const Pose<Scalar>& pose, Scalar temperature, Vec6<Scalar>& nominal_q,
                                              Vec6<Scalar>& load, Pose<Scalar>& target,
-                                             Vec6<Scalar>* payload_load = nullptr) const {
+                                             Vec6<Scalar>* payload_load = nullptr,
+                                             Scalar* family_values = nullptr) const {
     const bool thermal_here = thermal_ && !(Formulas::pose_twist && formulas_.has_pose());
     Scalar payload_weight = Scalar(0);
     Vec3<Scalar> payload_com = Vec3<Scalar>::Zero();
     if constexpr (Formulas::reads_load) payload_weight = formulas_.payload_weight(), payload_com = formulas_.payload_com();
     const Status s = model_.template nominal_configuration<Formulas::reads_load>(
-        pose, nominal_q, compliance_, effects_.load_direction, load, payload_weight, payload_com, payload_load);
+        pose, nominal_q, compliance_, effects_.load_direction, load, payload_weight, payload_com, payload_load,
+        family_values);
     if (s != Status::Ok) return to_compensation_status(s);
     target = thermal_here ? thermal_precorrect(effects_, pose, temperature) : pose;
     return CompensationStatus::Ok;

@@ -147,6 +147,31 @@ template <class G, class Scalar> Vec3<Scalar> rus6_crank_tip(const G& g, int i, 
                       g.shaft_points(2, i) + c * zz + s * (ax * zy - ay * zx));
 }
 
+// One leg at a pose and its crank's physical angle θ: the platform arm R·p_i,
+// the crank tip C_i, the rod's unit u_i and length, and the lever
+// λ_i = u_i · (a_i × (C_i − s_i)) (header comment; mm/rad). No checks: the
+// one place these are written (rus6_legs_at, the IK's checked Jacobian and
+// the formulas' `lever` read it). Always inlined: at -Os its own frame
+// (280 B) sat on the controller's deepest path, under checked_jacobian
+// (examples/firmware/footprint.sh, 2026-11-29).
+template <class Scalar> struct Rus6Leg {
+  Vec3<Scalar> arm, tip, unit;
+  Scalar length, lever;
+};
+template <class G, class Scalar>
+KINCAL_ALWAYS_INLINE Rus6Leg<Scalar> rus6_leg_at(const G& g, const Pose<Scalar>& pose, int i, Scalar theta) {
+  Rus6Leg<Scalar> leg;
+  leg.arm = pose.R * Vec3<Scalar>(g.platform_joints.col(i));
+  leg.tip = rus6_crank_tip(g, i, theta);
+  const Vec3<Scalar> rod = leg.arm + pose.p - leg.tip;
+  leg.length = rod.norm();
+  leg.unit = rod / leg.length;
+  const Vec3<Scalar> tip_velocity =
+      Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(leg.tip - g.shaft_points.col(i)));
+  leg.lever = leg.unit.dot(tip_velocity);
+  return leg;
+}
+
 // What the Jacobians are built from, at one (pose, θ): the caller's scratch.
 template <class Scalar> struct Rus6Legs {
   Eigen::Matrix<Scalar, 3, 6> arms;        // R·p_i, base axes
@@ -159,15 +184,13 @@ template <class Scalar> struct Rus6Legs {
 // Legs at a pose and the physical angles θ. No checks: a building block.
 template <class G, class Scalar>
 void rus6_legs_at(const G& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta, Rus6Legs<Scalar>& legs) {
-  legs.arms = pose.R * g.platform_joints;
   for (int i = 0; i < 6; ++i) {
-    legs.crank_tips.col(i) = rus6_crank_tip(g, i, theta(i));
-    const Vec3<Scalar> rod = legs.arms.col(i) + pose.p - legs.crank_tips.col(i);
-    legs.rod_lengths(i) = rod.norm();
-    legs.rod_units.col(i) = rod / legs.rod_lengths(i);
-    const Vec3<Scalar> tip_velocity =
-        Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(legs.crank_tips.col(i) - g.shaft_points.col(i)));
-    legs.levers(i) = Vec3<Scalar>(legs.rod_units.col(i)).dot(tip_velocity);
+    const Rus6Leg<Scalar> leg = rus6_leg_at(g, pose, i, theta(i));
+    legs.arms.col(i) = leg.arm;
+    legs.crank_tips.col(i) = leg.tip;
+    legs.rod_units.col(i) = leg.unit;
+    legs.rod_lengths(i) = leg.length;
+    legs.levers(i) = leg.lever;
   }
 }
 
@@ -272,29 +295,28 @@ KINCAL_NOINLINE Status jacobian_and_legs(const G& g, const Pose<Scalar>& pose, c
 // in double) and in a frame of its own. The controller's compensator asks
 // for it on its deepest stack path (the nominal configuration): a 6-RUS
 // image with formula effects needed 4 224 B of stack with the legs in the
-// IK's frame, over the 4 KiB bar (docs/benchmarks.md). Writes only on Ok.
+// IK's frame, over the 4 KiB bar (docs/benchmarks.md). `levers`, if given,
+// the six λ_i (the formulas' `lever`: the compensator's nominal
+// configuration hands them on instead of running the IK again; written as
+// they are found, also where the status is not Ok). Writes `jacobian` only
+// on Ok.
 template <class G, class Scalar>
 KINCAL_NOINLINE Status checked_jacobian(const G& g, const Pose<Scalar>& pose, const Vec6<Scalar>& theta,
-                                        Mat6<Scalar>& jacobian) {
+                                        Mat6<Scalar>& jacobian, Scalar* levers = nullptr) {
   SmallLu<Scalar, 6> lu;
   auto K = lu.storage();  // K_s: rus6_factor_regular's scaled wrenches
   Mat6<Scalar> J;
   bool finite = true, regular = true;
   for (int i = 0; i < 6; ++i) {
-    const Vec3<Scalar> arm = pose.R * Vec3<Scalar>(g.platform_joints.col(i));
-    const Vec3<Scalar> tip = rus6_crank_tip(g, i, theta(i));
-    const Vec3<Scalar> rod = arm + pose.p - tip;
-    const Vec3<Scalar> u = rod / rod.norm();
-    const Vec3<Scalar> tip_velocity =
-        Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(tip - g.shaft_points.col(i)));
-    const Scalar lever = u.dot(tip_velocity);
-    finite = finite && all_finite(u) && is_finite(lever);
-    regular = regular && std::abs(lever) > Tolerance<Scalar>::singular_pivot_ratio * g.crank_length(i);
-    const Vec3<Scalar> moment = arm.cross(u);
-    const Scalar inv_lever = Scalar(1) / lever;
-    K.template block<1, 3>(i, 0) = u.transpose();
+    const Rus6Leg<Scalar> leg = rus6_leg_at(g, pose, i, theta(i));
+    if (levers != nullptr) levers[i] = leg.lever;
+    finite = finite && all_finite(leg.unit) && is_finite(leg.lever);
+    regular = regular && std::abs(leg.lever) > Tolerance<Scalar>::singular_pivot_ratio * g.crank_length(i);
+    const Vec3<Scalar> moment = leg.arm.cross(leg.unit);
+    const Scalar inv_lever = Scalar(1) / leg.lever;
+    K.template block<1, 3>(i, 0) = leg.unit.transpose();
     K.template block<1, 3>(i, 3) = moment.transpose();
-    J.template block<1, 3>(i, 0) = inv_lever * u.transpose();
+    J.template block<1, 3>(i, 0) = inv_lever * leg.unit.transpose();
     J.template block<1, 3>(i, 3) = inv_lever * moment.transpose();
   }
   if (!finite) return Status::InvalidInput;
@@ -371,14 +393,16 @@ template <class G, class Scalar> Status closed_form_commands(const G& g, const P
 //   OutOfLimits   neither branch of some leg inside [min_joint, max_joint]
 // Two overloads, so that a caller without `legs` (the controller) has no
 // path to the legs' scratch: a static stack bound counts every call a
-// function can make, taken or not.
+// function can make, taken or not. The first also gives the six levers λ_i
+// with the Jacobian (`levers`, if given with `jacobian`).
 template <class G, class Scalar>
-Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian = nullptr) {
+Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian = nullptr,
+               NonDeducedT<Scalar>* levers = nullptr) {
   Vec6<Scalar> cmd;
   const Status s = rus6_detail::closed_form_commands(g, pose, cmd);
   if (s != Status::Ok) return s;
   if (jacobian != nullptr) {
-    const Status js = rus6_detail::checked_jacobian(g, pose, Vec6<Scalar>(cmd + g.joint_offset), *jacobian);
+    const Status js = rus6_detail::checked_jacobian(g, pose, Vec6<Scalar>(cmd + g.joint_offset), *jacobian, levers);
     if (js != Status::Ok) return js;
   }
   q = cmd;
@@ -388,7 +412,7 @@ Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeduced
 template <class G, class Scalar>
 Status rus6_ik(const G& g, const Pose<Scalar>& pose, Vec6<Scalar>& q, NonDeducedT<Mat6<Scalar>>* jacobian,
                NonDeducedT<Rus6Legs<Scalar>>* legs) {
-  if (legs == nullptr) return rus6_ik(g, pose, q, jacobian);
+  if (legs == nullptr) return rus6_ik(g, pose, q, jacobian, static_cast<Scalar*>(nullptr));
   Vec6<Scalar> cmd;
   const Status s = rus6_detail::closed_form_commands(g, pose, cmd);
   if (s != Status::Ok) return s;
@@ -421,19 +445,17 @@ template <class Scalar> Status rus6_home_branches(const Rus6Geometry<Scalar>& g,
 // expanding with temperature are the joint effect
 //   a · rod · (temp − 20) / lever.
 // Status of the IK where it fails (the host passes a geometry with its
-// limits opened for measured rows, as for the rest of a node). Leg by leg,
-// as rus6_legs_at, without its 6-leg scratch (the controller calls it
-// beside its compensation).
+// limits opened for measured rows, as for the rest of a node). Leg by leg
+// (rus6_leg_at), without the 6-leg scratch. The controller's compensator
+// takes the same levers from its nominal IK's Jacobian (rus6_ik's `levers`,
+// the same rus6_leg_at at the same angles) instead of calling this.
 template <class G, class Scalar> Status rus6_formula_joint_values(const G& g, const Pose<Scalar>& pose, Scalar* values) {
   Vec6<Scalar> q;
   const Status s = rus6_ik(g, pose, q);
   if (s != Status::Ok) return s;
   for (int i = 0; i < 6; ++i) {
-    const Vec3<Scalar> tip = rus6_crank_tip(g, i, Scalar(q(i) + g.joint_offset(i)));
-    const Vec3<Scalar> rod = pose.R * Vec3<Scalar>(g.platform_joints.col(i)) + pose.p - tip;
-    const Vec3<Scalar> tip_velocity = Vec3<Scalar>(g.shaft_axes.col(i)).cross(Vec3<Scalar>(tip - g.shaft_points.col(i)));
     values[i] = g.rod_length(i);
-    values[6 + i] = rod.dot(tip_velocity) / rod.norm();
+    values[6 + i] = rus6_leg_at(g, pose, i, Scalar(q(i) + g.joint_offset(i))).lever;
   }
   return Status::Ok;
 }

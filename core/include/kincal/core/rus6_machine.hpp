@@ -230,13 +230,20 @@ template <class S> struct Model<Rus6Machine<S>> {
   }
 
   // The nominal IK with its Jacobian (∂q/∂twist, rus6.hpp): q_nom, the
-  // singularity test (serial and parallel) and the static loads.
+  // singularity test (serial and parallel) and the static loads; with
+  // `family_values`, the formulas' `rod` and `lever` at the same
+  // configuration (rus6_formula_joint_values' numbers: the levers are the
+  // IK's own, so the IK runs once a point).
   template <bool kPayload>
   Status nominal_configuration(const Pose<S>& pose, Vec6<S>& nominal_q, bool need_load, const Vec3<S>& g, Vec6<S>& load,
-                               S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load) const {
+                               S payload_weight, const Vec3<S>& payload_com, Vec6<S>* payload_load,
+                               S* family_values) const {
     Mat6<S> J;
-    const Status s = rus6_ik(Rus6GeometryRef<S>(machine->nominal), pose, nominal_q, &J);
+    const Rus6GeometryRef<S> nominal(machine->nominal);
+    const Status s = rus6_ik(nominal, pose, nominal_q, &J, family_values != nullptr ? family_values + 6 : nullptr);
     if (s != Status::Ok) return s;
+    if (family_values != nullptr)
+      for (int i = 0; i < 6; ++i) family_values[i] = nominal.rod_length(i);
     return ik_jacobian_loads<kPayload>(J, pose, need_load, g, load, payload_weight, payload_com, payload_load);
   }
 
@@ -251,12 +258,6 @@ template <class S> struct Model<Rus6Machine<S>> {
     return rus6_ik(Rus6GeometryRef<S>(machine->calibrated), target, ideal);
   }
 
-  // `rod` and `lever` of every joint at the nominal configuration of the
-  // commanded pose, as identify evaluates them at a node. In a frame of its
-  // own: its IK's locals are off the stack when the compensator's IK runs.
-  KINCAL_NOINLINE Status formula_joint_values(const Pose<S>& pose, S* values) const {
-    return rus6_formula_joint_values(Rus6GeometryRef<S>(machine->nominal), pose, values);
-  }
 };
 
 }  // namespace compensation_detail

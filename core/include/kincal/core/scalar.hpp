@@ -18,9 +18,13 @@
 // closed-form IK, compiled for its one use (no Jacobian), so the Jacobian
 // code is not linked in.
 #define KINCAL_NOINLINE_FLATTEN __attribute__((noinline, flatten))
+// Inlined even at -Os: a small building block whose own frame (and the
+// copy of its result) would sit on the controller's deepest path.
+#define KINCAL_ALWAYS_INLINE inline __attribute__((always_inline))
 #else
 #define KINCAL_NOINLINE
 #define KINCAL_NOINLINE_FLATTEN
+#define KINCAL_ALWAYS_INLINE inline
 #endif
 
 namespace kincal {

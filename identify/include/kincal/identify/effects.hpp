@@ -34,6 +34,12 @@ struct EffectNode {
   // The robot's formula inputs (Robot::formula_inputs, that order) from the
   // row's columns; NaN where the data has none.
   std::vector<double> formula_inputs;
+  // What the robot's family offers formulas per joint at `pose`
+  // (family_formula_values: values[k·6 + j]; NaN where its IK fails), kept
+  // by effect_nodes for a robot with formula effects: the fits evaluate the
+  // formulas at the same node many times. Empty: formula_variables asks the
+  // family.
+  std::vector<double> family_values;
   std::string id;  // the row's id (messages)
 };
 
