@@ -237,7 +237,7 @@ TEST_P(FamilySeam, ParameterNamesAreUniqueWithUnitsAndSymmetricAliases) {
   }
   if (robot.is_stewart()) {  // with the key leg_offset_sq: six more, in mm² (squared leg-line offsets)
     ki::Robot with_legs = robot;
-    with_legs.models_leg_offsets = true;
+    with_legs.stewart_description().models_leg_offsets = true;
     const std::vector<ki::ParameterSpec>& specs = family.error_model().parameter_specs(with_legs);
     ASSERT_EQ(specs.size(), family.error_model().parameter_specs(robot).size() + 6);
     for (std::size_t k = specs.size() - 6; k < specs.size(); ++k) {

@@ -48,13 +48,13 @@ Robot machine(std::uint64_t seed) {
   const HybridErrorModel em(m.hybrid());
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  m.source_errors = Eigen::VectorXd::Zero(em.size());
+  m.hybrid_description().source_errors = Eigen::VectorXd::Zero(em.size());
   for (int k = 0; k < HybridErrorModel::kSeedParameterCount; ++k) {
     const auto& p = em.parameters()[static_cast<std::size_t>(k)];
     if (p.encoder())
-      m.source_errors(k) = (u(rng) < 0 ? -1.0 : 1.0) * (p.angular() ? 0.5e-3 : 0.3);
+      m.hybrid_description().source_errors(k) = (u(rng) < 0 ? -1.0 : 1.0) * (p.angular() ? 0.5e-3 : 0.3);
     else
-      m.source_errors(k) = u(rng) * (p.angular() ? 100e-6 : 0.050);
+      m.hybrid_description().source_errors(k) = u(rng) * (p.angular() ? 100e-6 : 0.050);
   }
   return m;
 }
@@ -205,8 +205,8 @@ TEST(identifyHybridCalibration, CompensationInvertsTheModelledMachine) {
   const HybridCalibration cal = calibrate_hybrid(nominal(), measure(machine(7), 0.0, 107));
   const HybridCompensation c = cal.compensation(EstimatorKind::Liu);
   Robot believed = nominal();
-  believed.source_errors = c.structural;
-  believed.source_errors.head<6>() = c.encoder_offsets;
+  believed.hybrid_description().source_errors = c.structural;
+  believed.hybrid_description().source_errors.head<6>() = c.encoder_offsets;
   const auto e = evaluate_hybrid(believed, nominal().hybrid(), poses(), &c);
   for (const auto& l : e) {
     EXPECT_LT(l.max_position, 1e-3) << l.layer;

@@ -144,7 +144,7 @@ TEST(identifyJointLimits, HybridRowsPastTheStrokeAreIdentified) {
       continue;
     Pose<double> tool;
     if (kincal::hybrid_fk(actual, q, passive, tool).status != Status::Ok) continue;
-    r.targets = ki::gauge_targets(g, robot.gauge_radius, tool);
+    r.targets = ki::gauge_targets(g, robot.hybrid_description().gauge_radius, tool);
     if ((q.array() > g.max_joint.array()).any() || (q.array() < g.min_joint.array()).any()) ++past;
     data.rows.push_back(r);
   }
@@ -292,7 +292,7 @@ HybridLargeCase hybrid_case(const ki::Robot& robot, double error_scale) {
     if (kincal::hybrid_ik(g, Pose<double>::from_xyz_rpy(r.commanded), q, nullptr, &passive) != Status::Ok) continue;
     Pose<double> tool;
     if (model.actual_fk(e, q, passive, tool).status != Status::Ok) continue;
-    Eigen::Matrix<double, 3, 3> t = ki::gauge_targets(g, robot.gauge_radius, tool);
+    Eigen::Matrix<double, 3, 3> t = ki::gauge_targets(g, robot.hybrid_description().gauge_radius, tool);
     for (int i = 0; i < 9; ++i) t.data()[i] += noise(rng);
     r.targets = t;
     const bool test = c.test.rows.size() < 40 && k % 3 == 2;

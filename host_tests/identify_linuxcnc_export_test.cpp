@@ -365,7 +365,7 @@ namespace {
 // offset's √(D² − o²) uncompensated. All zeros: exported as before.
 TEST(LinuxCncExport, RefusesALegLineOffsetItCannotCarry) {
   ki::CalibrationModel model = model_with_errors(0.2, 11, false);
-  model.nominal.models_leg_offsets = true;
+  model.nominal.stewart_description().models_leg_offsets = true;
   model.source_file = "legs.json";
   EXPECT_NO_THROW((void)ki::linuxcnc_export(model));
   model.parameters.push_back({"dsq4", 0.8, 0.0, true});

@@ -74,7 +74,7 @@ TEST(identifyRobot, BuiltinsByName) {
   ASSERT_TRUE(h.is_hybrid());
   EXPECT_STREQ(h.family(), "hybrid-3ups-up-3r");
   expect_same_hybrid(h.hybrid(), kincal::make_hybrid_seed000<double>());
-  EXPECT_EQ(h.gauge_radius, 200.0);
+  EXPECT_EQ(h.hybrid_description().gauge_radius, 200.0);
   EXPECT_EQ(h.screw_lead, 5.0);
 }
 
@@ -85,7 +85,7 @@ TEST(identifyRobot, JsonRoundTripOfBothBuiltins) {
   const ki::Robot h = ki::parse_robot(hybrid_json(), "h.json");
   EXPECT_EQ(h.name, "hybrid-seed000");
   expect_same_hybrid(h.hybrid(), kincal::make_hybrid_seed000<double>());
-  EXPECT_EQ(h.gauge_radius, 200.0);
+  EXPECT_EQ(h.hybrid_description().gauge_radius, 200.0);
   // Writing the parsed robot again gives the same text.
   EXPECT_EQ(ki::robot_to_json(s), stewart_json());
   EXPECT_EQ(ki::robot_to_json(h), hybrid_json());
@@ -136,7 +136,7 @@ TEST(identifyRobot, CustomHybridDerivationMatchesCoreFactory) {
   c.beta = 0.4;
   c.tool_length = 300;
   c.reference_extension = 900;
-  r.geometry = ki::make_hybrid_geometry(c);
+  r.hybrid() = ki::make_hybrid_geometry(c);
   const kincal::Pose<double> home2 = r.home_pose();
   EXPECT_LT(home2.p.norm(), 1e-12);
   EXPECT_LT((home2.R - kincal::Mat3<double>::Identity()).norm(), 1e-14);
@@ -262,7 +262,7 @@ TEST(identifyRobot, OptionalKeysHaveDefaults) {
   t = replace(t, "  \"gauge_radius\": 200.0,\n", "");
   t = replace(t, ",\n  \"screw_lead\": 5.0", "");
   const ki::Robot h = ki::parse_robot(t, "h.json");
-  EXPECT_EQ(h.gauge_radius, 200.0);
+  EXPECT_EQ(h.hybrid_description().gauge_radius, 200.0);
   EXPECT_EQ(h.screw_lead, 5.0);
   EXPECT_EQ(h.hybrid().joint_offset, kincal::Vec6<double>::Zero());
 }

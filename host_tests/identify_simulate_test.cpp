@@ -233,9 +233,9 @@ TEST(identifySimulate, HybridSourceErrorsDriveTheChainModel) {
   const ki::ParameterSet errors =
       ki::parse_parameters("name,value\ndxi_3_1,0.3\ndx_2_1,0.05\ndalpha_3_4,0.0002\n", "src.csv", nominal);
   const ki::Robot actual = ki::apply_parameters(nominal, errors);
-  ASSERT_EQ(actual.source_errors.size(), ki::HybridErrorModel::kParameterCount);
+  ASSERT_EQ(actual.hybrid_description().source_errors.size(), ki::HybridErrorModel::kParameterCount);
   const ki::HybridErrorModel model(nominal.hybrid());
-  EXPECT_EQ(actual.source_errors(model.index_of("dx_2_1")), 0.05);
+  EXPECT_EQ(actual.hybrid_description().source_errors(model.index_of("dx_2_1")), 0.05);
   const ki::PoseTable poses = ki::parse_pose_table("id,x,y,z,rx,ry,rz\na,100,-50,20,0,0,0\n", "p.csv");
   ki::SimulateReport rep;
   const ki::PoseTable out = ki::simulate(nominal, actual, poses, ki::SimulateOptions{}, rep);
@@ -246,7 +246,7 @@ TEST(identifySimulate, HybridSourceErrorsDriveTheChainModel) {
   ASSERT_EQ(kincal::hybrid_ik(nominal.hybrid(), kincal::Pose<double>::from_xyz_rpy(poses.rows[0].commanded), q, nullptr, &s),
             kincal::Status::Ok);
   kincal::Pose<double> direct;
-  ASSERT_EQ(model.actual_fk(actual.source_errors, q, s, direct).status, kincal::Status::Ok);
+  ASSERT_EQ(model.actual_fk(actual.hybrid_description().source_errors, q, s, direct).status, kincal::Status::Ok);
   EXPECT_LT((kincal::Pose<double>::from_xyz_rpy(*out.rows[0].measured).p - direct.p).norm(), 1e-9);
   // And the errors are felt: the encoder offset alone moves the tool ~0.3 mm.
   EXPECT_GT((direct.p - kincal::Pose<double>::from_xyz_rpy(poses.rows[0].commanded).p).norm(), 0.1);

@@ -64,11 +64,11 @@ const ki::PoseTable& hybrid_data() {
     const ki::HybridErrorModel em(m.hybrid());
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    m.source_errors = Eigen::VectorXd::Zero(em.size());
+    m.hybrid_description().source_errors = Eigen::VectorXd::Zero(em.size());
     for (int k = 0; k < em.size(); ++k) {
       const auto& p = em.parameters()[static_cast<std::size_t>(k)];
-      m.source_errors(k) = p.encoder() ? (u(rng) < 0 ? -1.0 : 1.0) * (p.angular() ? 0.5e-3 : 0.3)
-                                       : u(rng) * (p.angular() ? 100e-6 : 0.050);
+      m.hybrid_description().source_errors(k) = p.encoder() ? (u(rng) < 0 ? -1.0 : 1.0) * (p.angular() ? 0.5e-3 : 0.3)
+                                                            : u(rng) * (p.angular() ? 100e-6 : 0.050);
     }
     return simulated(hybrid_nominal(), m, ki::read_pose_table(kExamples + "/hybrid-seed000/poses.csv"), 0.005, 0,
                      {}, 107);

@@ -53,7 +53,7 @@ Rus6Geometry<double> without_limits(Rus6Geometry<double> g) {
 }
 
 Robot without_limits(Robot robot) {
-  std::visit([](auto& g) { g = without_limits(g); }, robot.geometry);
+  std::visit([](auto& part) { part.geometry = without_limits(part.geometry); }, robot.family_data);
   return robot;
 }
 

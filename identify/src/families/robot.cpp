@@ -66,12 +66,14 @@ Robot builtin_robot(const std::string& name) {
   Robot r;
   r.name = name;
   if (name == "stewart-seed001") {
-    r.geometry = make_stewart_seed001<double>();
+    r.family_data = StewartDescription{make_stewart_seed001<double>()};
   } else if (name == "hybrid-seed000") {
-    r.geometry = make_hybrid_seed000<double>();
-    r.gauge_radius = HybridSeed000Dimensions::gauge_radius;
+    HybridDescription h;
+    h.geometry = make_hybrid_seed000<double>();
+    h.gauge_radius = HybridSeed000Dimensions::gauge_radius;
+    r.family_data = h;
   } else if (name == "rus6-ref") {
-    r.geometry = make_rus6_ref<double>();
+    r.family_data = Rus6Description{make_rus6_ref<double>()};
     r.screw_lead = Rus6RefDimensions::cyclic_period;
   } else {
     throw InputError("unknown built-in robot '" + name + "' (built-ins: stewart-seed001, hybrid-seed000, rus6-ref)");

@@ -224,8 +224,9 @@ struct HybridLayerError {
 
 // Commands every row's pose (compensated when `compensation` is given, else
 // the nominal IK of `nominal`), drives the erroneous `machine` (hybrid Robot
-// with source_errors, or its ideal geometry if none) and compares the reached
-// pose with the requested one. One entry per layer, ascending.
+// with its HybridDescription::source_errors, or its ideal geometry if none)
+// and compares the reached pose with the requested one. One entry per layer,
+// ascending.
 std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const HybridGeometry<double>& nominal,
                                               const PoseTable& poses, const HybridCompensation* compensation);
 

@@ -1,7 +1,8 @@
 // Robot descriptions: a built-in reference machine by name, or a JSON robot
 // description file (schema: docs/formats.md). A Robot is a value holding one
-// of the core geometries plus the host-side data that core does not need
-// (name, gauge size, screw lead).
+// family's part (one of the core geometries with the host-side data only
+// that family has, e.g. the hybrid's gauge size) plus the host-side data
+// every family has (name, screw lead, bounds, targets, formula effects).
 #pragma once
 
 #include <memory>
@@ -58,18 +59,47 @@ struct FamilyFormulaVariable {
   std::string description;  // what it is, in its unit (`kincal effects`)
 };
 
-struct Robot {
-  std::string name;
-  // One alternative per family (the registry line of this layer).
-  std::variant<StewartGeometry<double>, HybridGeometry<double>, Rus6Geometry<double>> geometry;
-  // The `cyclic` effect's period in joint units (GUIDE): a screw's lead, mm
-  // per revolution; the 6-RUS's crank angle per motor revolution, rad.
-  double screw_lead = 5.0;
-  double gauge_radius = 0.0;   // |P0 Pj| of the three-target gauge (hybrid only), mm
-  // Hybrid only: seed 000's joint/link source errors Δχ (150, in the order of
+// A family's part of a Robot: core's geometry plus the host-side data only
+// that family has. Robot::family_data holds exactly one of them.
+
+// The 6-UPS (stewart-6ups).
+struct StewartDescription {
+  StewartGeometry<double> geometry;
+  // The optional description key `leg_offset_sq` (mm², six: the squared
+  // distance of each leg's prismatic line from its U centre,
+  // core/stewart.hpp). Given, even as zeros, the identification also fits
+  // the six (dsq1..dsq6, after seed 001's 42); absent, they are not modelled.
+  bool models_leg_offsets = false;
+};
+
+// The hybrid (hybrid-3ups-up-3r).
+struct HybridDescription {
+  HybridGeometry<double> geometry;
+  double gauge_radius = 0.0;  // |P0 Pj| of seed 000's three-target gauge, mm
+  // Seed 000's joint/link source errors Δχ (150, in the order of
   // HybridErrorModel, identify/hybrid_error_model.hpp), set from PARAMS.csv.
   // Empty = none; then the machine is the (possibly modified) ideal geometry.
   Eigen::VectorXd source_errors;
+};
+
+// The 6-RUS (rus6): its geometry is all it has.
+struct Rus6Description {
+  Rus6Geometry<double> geometry;
+};
+
+struct Robot {
+  std::string name;
+  // The family's part: one alternative per family (the registry line of this
+  // layer). Everything only one family has lives in its alternative (the
+  // *Description structs above: the geometry, the hybrid's gauge radius and
+  // source errors, the 6-UPS's leg offsets), never among the common members
+  // below; stewart()/hybrid()/rus6() reach the geometry,
+  // *_description() the whole part.
+  std::variant<StewartDescription, HybridDescription, Rus6Description> family_data;
+  // The common part: what every family has.
+  // The `cyclic` effect's period in joint units (GUIDE): a screw's lead, mm
+  // per revolution; the 6-RUS's crank angle per motor revolution, rad.
+  double screw_lead = 5.0;
   // The largest correction the controller may apply per joint (mm for
   // prismatic, rad for revolute joints): the optional description key
   // `max_correction`. Unset = core's default_bounds (5 mm, 0.02 rad). A
@@ -88,13 +118,8 @@ struct Robot {
   // The optional description key `targets`: 1–3 nominal positions [x, y, z]
   // of tracker targets (SMRs) on the platform (6-UPS, platform frame) or the
   // tool (hybrid, tool frame), mm. Empty = none given; the hybrid is then
-  // measured by seed 000's three-target gauge (gauge_radius).
+  // measured by seed 000's three-target gauge (HybridDescription::gauge_radius).
   std::vector<Vec3<double>> targets;
-  // 6-UPS only: the optional description key `leg_offset_sq` (mm², six: the
-  // squared distance of each leg's prismatic line from its U centre,
-  // core/stewart.hpp). Given, even as zeros, the identification also fits
-  // the six (dsq1..dsq6, after seed 001's 42); absent, they are not modelled.
-  bool models_leg_offsets = false;
   // The optional key `effects` (GUIDE "Effects written as formulas"): the
   // description's formula effects, compiled, in the order written; their
   // numbers follow one another in core's user slot. `effects_json` is the
@@ -113,15 +138,23 @@ struct Robot {
   Vec3<double> payload_com = Vec3<double>::Zero();
   bool has_payload = false;
 
-  bool is_stewart() const { return std::holds_alternative<StewartGeometry<double>>(geometry); }
-  bool is_hybrid() const { return std::holds_alternative<HybridGeometry<double>>(geometry); }
-  const StewartGeometry<double>& stewart() const { return std::get<StewartGeometry<double>>(geometry); }
-  StewartGeometry<double>& stewart() { return std::get<StewartGeometry<double>>(geometry); }
-  const HybridGeometry<double>& hybrid() const { return std::get<HybridGeometry<double>>(geometry); }
-  HybridGeometry<double>& hybrid() { return std::get<HybridGeometry<double>>(geometry); }
-  bool is_rus6() const { return std::holds_alternative<Rus6Geometry<double>>(geometry); }
-  const Rus6Geometry<double>& rus6() const { return std::get<Rus6Geometry<double>>(geometry); }
-  Rus6Geometry<double>& rus6() { return std::get<Rus6Geometry<double>>(geometry); }
+  bool is_stewart() const { return std::holds_alternative<StewartDescription>(family_data); }
+  bool is_hybrid() const { return std::holds_alternative<HybridDescription>(family_data); }
+  bool is_rus6() const { return std::holds_alternative<Rus6Description>(family_data); }
+  // The family's part; std::bad_variant_access for another family.
+  const StewartDescription& stewart_description() const { return std::get<StewartDescription>(family_data); }
+  StewartDescription& stewart_description() { return std::get<StewartDescription>(family_data); }
+  const HybridDescription& hybrid_description() const { return std::get<HybridDescription>(family_data); }
+  HybridDescription& hybrid_description() { return std::get<HybridDescription>(family_data); }
+  const Rus6Description& rus6_description() const { return std::get<Rus6Description>(family_data); }
+  Rus6Description& rus6_description() { return std::get<Rus6Description>(family_data); }
+  // The family's geometry.
+  const StewartGeometry<double>& stewart() const { return stewart_description().geometry; }
+  StewartGeometry<double>& stewart() { return stewart_description().geometry; }
+  const HybridGeometry<double>& hybrid() const { return hybrid_description().geometry; }
+  HybridGeometry<double>& hybrid() { return hybrid_description().geometry; }
+  const Rus6Geometry<double>& rus6() const { return rus6_description().geometry; }
+  Rus6Geometry<double>& rus6() { return rus6_description().geometry; }
 
   // What the robot's family answers (identify/src/families/family.hpp; the
   // switches on is_stewart()/is_hybrid() belong inside a family's folder).

@@ -27,8 +27,8 @@ HybridBaseFit::HybridBaseFit(const Robot& robot, const PoseTable& data,
                              const std::vector<std::optional<EffectNode>>& en,
                              std::optional<EstimatorKind> estimator, bool finish, double ridge_k)
     : robot_(&robot), en_(&en), g0_(without_limits(robot.hybrid())),
-      gauge_(MeasurementModel::gauge(g0_, robot.gauge_radius)), ridge_(estimator == EstimatorKind::Ridge),
-      finish_(finish) {
+      gauge_(MeasurementModel::gauge(g0_, robot.hybrid_description().gauge_radius)),
+      ridge_(estimator == EstimatorKind::Ridge), finish_(finish) {
   fine_ = ridge_                                      ? EstimatorKind::Ridge
           : estimator == EstimatorKind::Ols || finish ? EstimatorKind::Ols
                                                       : EstimatorKind::Liu;
@@ -182,7 +182,7 @@ bool HybridBaseFit::structural_twist(const Pose<double>& pose, Twist<double>& t)
 }
 
 VectorXd HybridBaseFit::gauge_residual(const PoseRow& row, const Pose<double>& modelled) const {
-  const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0_, robot_->gauge_radius, modelled);
+  const Eigen::Matrix<double, 3, 3> t = gauge_targets(g0_, robot_->hybrid_description().gauge_radius, modelled);
   VectorXd r(9);
   for (int i = 0; i < 9; ++i) r(i) = row.targets->data()[i] - t.data()[i];
   return r;

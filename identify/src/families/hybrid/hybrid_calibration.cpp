@@ -178,13 +178,14 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
                                    const HybridCalibrationOptions& options) {
   if (!nominal.is_hybrid())
     throw InputError("hybrid calibration needs a hybrid robot (" + std::string(kHybridFamily) + ")");
-  if (!(nominal.gauge_radius > 0)) throw InputError("hybrid calibration: the robot has no gauge radius");
+  if (!(nominal.hybrid_description().gauge_radius > 0))
+    throw InputError("hybrid calibration: the robot has no gauge radius");
   if (!(options.eps_xi > 0) || options.max_coarse_iterations < 1)
     throw InputError("hybrid calibration: eps_xi must be > 0 and max_coarse_iterations >= 1");
   // Measured rows are modelled without the file's limits (joint_limits.hpp);
   // the result keeps the robot's own (out.nominal, the compensation).
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
-  const double radius = nominal.gauge_radius;
+  const double radius = nominal.hybrid_description().gauge_radius;
   require_gauge_triangles(data, radius);
   // What the gauge measures (seed 000 Eq. (9)); every design row below is
   // its M·B.
@@ -549,7 +550,7 @@ IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const Hybr
   if (!nominal.is_hybrid()) throw InputError("hybrid_identifiability_hint needs a hybrid robot");
   if (!cal.fine_done || cal.fine_poses.empty()) return {};
   const HybridGeometry<double> g0 = without_limits(nominal.hybrid());
-  const double radius = nominal.gauge_radius;
+  const double radius = nominal.hybrid_description().gauge_radius;
   const HybridErrorModel model(g0);
   const MeasurementModel gauge = MeasurementModel::gauge(g0, radius);
   // The fine stage's rows at a pose: gauge map × B (Eq. (9)), all 150 columns.
@@ -616,7 +617,7 @@ std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const Hybrid
                                               const PoseTable& poses, const HybridCompensation* compensation) {
   if (!machine.is_hybrid()) throw InputError("evaluate_hybrid needs a hybrid machine");
   const HybridErrorModel em(machine.hybrid());
-  const bool sources = machine.source_errors.size() > 0;
+  const bool sources = machine.hybrid_description().source_errors.size() > 0;
   std::map<long long, HybridLayerError> layers;
   constexpr double kDeg = 180.0 / 3.14159265358979323846;
   for (const PoseRow& row : poses.rows) {
@@ -631,7 +632,7 @@ std::vector<HybridLayerError> evaluate_hybrid(const Robot& machine, const Hybrid
     if (st == Status::Ok && compensation != nullptr) st = compensate_hybrid(*compensation, requested, q);
     Pose<double> reached;
     if (st == Status::Ok)
-      st = sources ? em.actual_fk(machine.source_errors, q, passive, reached).status
+      st = sources ? em.actual_fk(machine.hybrid_description().source_errors, q, passive, reached).status
                    : hybrid_fk(machine.hybrid(), q, passive, reached).status;
     if (st != Status::Ok) {
       ++e.failed;
@@ -709,7 +710,7 @@ CalibrationModel hybrid_model(const Robot& nominal, const HybridCalibration& cal
   if (!nominal.is_hybrid()) throw InputError("hybrid_model needs a hybrid robot");
   CalibrationModel m;
   m.nominal = nominal;
-  m.nominal.source_errors.resize(0);
+  m.nominal.hybrid_description().source_errors.resize(0);
   m.data_file = data_file;
   const HybridCompensation c = cal.compensation(fine);
   const HybridErrorModel& em = *c.model;
@@ -781,7 +782,7 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     chains = compensation->chains();
   else
     hybrid_exact_chains(g0, HybridErrorModelOptions().up_split, static_cast<const double*>(nullptr), chains);
-  const MeasurementModel gauge = MeasurementModel::gauge(g0, nominal.gauge_radius);
+  const MeasurementModel gauge = MeasurementModel::gauge(g0, nominal.hybrid_description().gauge_radius);
   std::vector<PoseErrorRow> rows;
   std::size_t skipped = 0;
   std::vector<UnevaluatedRow> unevaluated;
@@ -807,7 +808,7 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     }
     Eigen::Matrix<double, 9, 1> measured;
     for (int k = 0; k < 9; ++k) measured(k) = row.targets->data()[k];
-    const Eigen::Matrix<double, 9, 1> dp = measured - targets9(g0, nominal.gauge_radius, predicted);
+    const Eigen::Matrix<double, 9, 1> dp = measured - targets9(g0, nominal.hybrid_description().gauge_radius, predicted);
     // The residual twist read back from the targets' displacements: the
     // least-squares solution of M·$ = Δp (Eq. (9)'s map at the modelled pose).
     Eigen::Matrix<double, 9, 6> P;

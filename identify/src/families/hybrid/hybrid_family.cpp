@@ -85,10 +85,12 @@ Robot HybridFamilyDescription::parse(const nlohmann::json& doc, const detail::De
   d.max_extension = r.number(ext["max"], "/extension_limits/max");
   if (!(d.min_extension < d.max_extension)) r.fail("/extension_limits", "'extension_limits': min must be below max");
   d.joint_offset = doc.contains("joint_offset") ? r.vector<6>(doc["joint_offset"], "/joint_offset") : Vec6<double>::Zero();
-  robot.gauge_radius = doc.contains("gauge_radius") ? r.positive(doc["gauge_radius"], "/gauge_radius")
-                                                    : HybridSeed000Dimensions::gauge_radius;
+  HybridDescription part;
+  part.gauge_radius = doc.contains("gauge_radius") ? r.positive(doc["gauge_radius"], "/gauge_radius")
+                                                   : HybridSeed000Dimensions::gauge_radius;
   r.common_optional(doc, robot);
-  robot.geometry = make_hybrid_geometry(d);
+  part.geometry = make_hybrid_geometry(d);
+  robot.family_data = part;
   Vec6<double> q;
   // With the Jacobian: degenerate joint layouts (base or platform joints at
   // one point or on one line) are singular at the reference pose.
@@ -114,7 +116,7 @@ void HybridFamilyDescription::write(const Robot& robot, nlohmann::ordered_json& 
   j["joint_limits"] = {{"min", detail::vector_json<6>(d.min_joint)}, {"max", detail::vector_json<6>(d.max_joint)}};
   j["extension_limits"] = {{"min", d.min_extension}, {"max", d.max_extension}};
   j["joint_offset"] = detail::vector_json<6>(d.joint_offset);
-  j["gauge_radius"] = robot.gauge_radius;
+  j["gauge_radius"] = robot.hybrid_description().gauge_radius;
 }
 
 void HybridFamilyDescription::summarize(const Robot& robot, std::ostream& os) const {
@@ -125,7 +127,7 @@ void HybridFamilyDescription::summarize(const Robot& robot, std::ostream& os) co
   for (int i = 0; i < 3; ++i) os << "  " << i + 1 << ": " << d.platform_joints.col(i).transpose() << "\n";
   os << "|A64 Q| = " << d.platform_to_wrist << " mm, |Q P0| = " << d.wrist_link << " mm, |P0 P| = " << d.tool_length
      << " mm, beta = " << d.beta << " rad, reference extension = " << d.reference_extension << " mm\n"
-     << "gauge radius |P0 Pj| = " << robot.gauge_radius << " mm\n";
+     << "gauge radius |P0 Pj| = " << robot.hybrid_description().gauge_radius << " mm\n";
 }
 
 // ---------------------------------------------------------------- kinematics
@@ -215,20 +217,22 @@ std::vector<ParameterSpec> hybrid_table() {
   for (const HybridErrorParameter& p : model.parameters()) {
     const int index = model.index_of(p.name);
     t.push_back({p.name, p.unit(), "seed 000 source error " + p.symbol, [index](Robot& r, double v) {
-                   if (r.source_errors.size() == 0) r.source_errors = Eigen::VectorXd::Zero(HybridErrorModel::kParameterCount);
-                   r.source_errors(index) += v;
+                   Eigen::VectorXd& errors = r.hybrid_description().source_errors;
+                   if (errors.size() == 0) errors = Eigen::VectorXd::Zero(HybridErrorModel::kParameterCount);
+                   errors(index) += v;
                  }});
   }
   return t;
 }
 
-// The erroneous machine: seed 000's source errors (Robot::source_errors) on
+// The erroneous machine: seed 000's source errors (HybridDescription::source_errors) on
 // the nonlinear chain when given, else the (possibly modified) ideal chain.
 // The passive joints start from the nominal IK's.
 class HybridActual final : public ActualMachine {
  public:
   HybridActual(const Robot& nominal, const Robot& actual) : nominal_(nominal.hybrid()), actual_(actual) {
-    if (actual.source_errors.size() > 0) sources_ = std::make_unique<HybridErrorModel>(actual.hybrid());
+    if (actual.hybrid_description().source_errors.size() > 0)
+      sources_ = std::make_unique<HybridErrorModel>(actual.hybrid());
   }
   ReachedPose reach(const PoseRow& row,
                     const std::function<Vec6<double>(const Vec6<double>&)>& joint_error) const override {
@@ -248,7 +252,7 @@ class HybridActual final : public ActualMachine {
       q = q_ik;
     }
     if (joint_error) q += joint_error(q);
-    out.status = sources_ ? sources_->actual_fk(actual_.source_errors, q, passive, out.pose).status
+    out.status = sources_ ? sources_->actual_fk(actual_.hybrid_description().source_errors, q, passive, out.pose).status
                           : hybrid_fk(actual_.hybrid(), q, passive, out.pose).status;
     out.stage = "forward kinematics of the erroneous machine";
     return out;

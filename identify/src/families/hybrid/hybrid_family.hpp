@@ -50,7 +50,7 @@ class HybridFamilyMeasurement final : public FamilyMeasurement {
   std::string missing_measurement(const Robot& robot, const PoseTable& data) const override;
   const char* own_measurement() const override { return "the hybrid's gauge"; }
   std::optional<MeasurementModel> own_targets(const Robot& robot) const override {
-    return MeasurementModel::gauge(robot.hybrid(), robot.gauge_radius);  // seed 000's gauge
+    return MeasurementModel::gauge(robot.hybrid(), robot.hybrid_description().gauge_radius);  // seed 000's gauge
   }
   // seed 000's layers: one layer of pure translations.
   HandGrid hand_grid() const override { return {1, false}; }

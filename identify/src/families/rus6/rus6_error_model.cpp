@@ -72,7 +72,7 @@ const std::vector<ParameterSpec>& Rus6FamilyErrorModel::parameter_specs(const Ro
                                                                         
 Rus6Geometry<double> rus6_with_errors(const Rus6Geometry<double>& nominal, const Eigen::VectorXd& x) {
   Robot r;
-  r.geometry = nominal;
+  r.family_data = Rus6Description{nominal};
   const std::vector<ParameterSpec>& specs = rus6_specs();
   for (std::size_t k = 0; k < specs.size() && Eigen::Index(k) < x.size(); ++k)
     if (x(Eigen::Index(k)) != 0.0) specs[k].add(r, x(Eigen::Index(k)));

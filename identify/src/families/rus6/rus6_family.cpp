@@ -94,7 +94,7 @@ Robot Rus6FamilyDescription::parse(const nlohmann::json& doc, const detail::Desc
     r.fail("/platform_joints", "the geometry is singular at its home pose (a rod in line with its crank, or rods that "
                                "cannot hold the platform)");
   if (s != Status::Ok) r.fail("/home", std::string("the home pose is not reachable: ") + to_string(s));
-  robot.geometry = g;
+  robot.family_data = Rus6Description{g};
   return robot;
 }
 

@@ -17,7 +17,7 @@ detail::BaseModel StewartFamilyPipeline::fit_base(const Robot& robot, const Pose
   BaseModel base;
   base.parameters = stewart_parameter_count(robot);
   base.description = "seed 001 " + std::to_string(base.parameters) + "-parameter model" +
-                     (robot.models_leg_offsets ? " with leg offsets" : "") + " (iterated LS, " +
+                     (robot.stewart_description().models_leg_offsets ? " with leg offsets" : "") + " (iterated LS, " +
                      std::to_string(cal.history.size()) + " rounds)";
   Vec6<double> w;
   w << 1, 1, 1, kOrientationWeightMm, kOrientationWeightMm, kOrientationWeightMm;
@@ -33,7 +33,7 @@ detail::BaseModel StewartFamilyPipeline::fit_base(const Robot& robot, const Pose
     n.pose_rows = true;
     n.r = w.asDiagonal() * pose_error(measured, predicted);
     n.M = w.asDiagonal();
-    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted, robot.models_leg_offsets);
+    n.H = w.asDiagonal() * stewart_error_jacobian(g, predicted, robot.stewart_description().models_leg_offsets);
     n.effect = *en[k];
     base.nodes.push_back(std::move(n));
   }

@@ -15,7 +15,7 @@
 namespace kincal::identify {
 
 int stewart_parameter_count(const Robot& robot) {
-  return robot.models_leg_offsets ? kStewartLegOffsetParameterCount : kStewartParameterCount;
+  return robot.stewart_description().models_leg_offsets ? kStewartLegOffsetParameterCount : kStewartParameterCount;
 }
 
 StewartErrorJacobian stewart_error_jacobian(const StewartGeometry<double>& g, const Pose<double>& pose, bool leg_offsets) {
@@ -139,7 +139,7 @@ StewartCalibration calibrate_stewart(const Robot& nominal, const PoseTable& data
   const Robot open = without_limits(nominal);
   const std::vector<Node> nodes = calibration_nodes(open, data);
   const int m = stewart_parameter_count(nominal);
-  const bool leg_offsets = nominal.models_leg_offsets;
+  const bool leg_offsets = nominal.stewart_description().models_leg_offsets;
   const Eigen::Index n = Eigen::Index(6 * nodes.size());
   const std::vector<std::string> names = parameter_names(nominal);
 

@@ -32,10 +32,11 @@ class StewartErrors final : public FamilyErrors {
     return true;
   }
   Eigen::MatrixXd twist_columns(const Eigen::VectorXd& errors, const Pose<double>& pose) const override {
-    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose, robot_.models_leg_offsets);
+    return stewart_error_jacobian(stewart_with_errors(g_, errors), pose,
+                                  robot_.stewart_description().models_leg_offsets);
   }
   bool nominal_twist_columns(const Pose<double>& pose, Eigen::MatrixXd& T) const override {
-    T = stewart_error_jacobian(g_, pose, robot_.models_leg_offsets);
+    T = stewart_error_jacobian(g_, pose, robot_.stewart_description().models_leg_offsets);
     return true;
   }
   // A rigid motion of all platform joints (with the targets) changes no

@@ -24,14 +24,14 @@ Robot StewartFamilyDescription::parse(const nlohmann::json& doc, const detail::D
   g.length_offset = doc.contains("length_offset") ? r.vector<6>(doc["length_offset"], "/length_offset") : Vec6<double>::Zero();
   // Leg lines beside their U centres (core/stewart.hpp): the key's presence
   // is the choice to model them.
-  robot.models_leg_offsets = doc.contains("leg_offset_sq");
-  if (robot.models_leg_offsets) g.leg_offset_sq = r.vector<6>(doc["leg_offset_sq"], "/leg_offset_sq");
+  const bool models_leg_offsets = doc.contains("leg_offset_sq");
+  if (models_leg_offsets) g.leg_offset_sq = r.vector<6>(doc["leg_offset_sq"], "/leg_offset_sq");
   const nlohmann::json& home = r.object(doc["home"], "/home", {"x", "y", "z", "rx", "ry", "rz"}, {});
   g.home = Pose<double>::from_xyz_rpy(r.number(home["x"], "/home/x"), r.number(home["y"], "/home/y"),
                                       r.number(home["z"], "/home/z"), r.angle(home["rx"], "/home/rx"),
                                       r.angle(home["ry"], "/home/ry"), r.angle(home["rz"], "/home/rz"));
   r.common_optional(doc, robot);
-  robot.geometry = g;
+  robot.family_data = StewartDescription{g, models_leg_offsets};
   Vec6<double> q;
   // With the Jacobian: a geometry whose legs cannot hold the platform (six
   // base joints at one point, collinear platform joints, …) is singular at
@@ -51,7 +51,7 @@ void StewartFamilyDescription::write(const Robot& robot, nlohmann::ordered_json&
   j["platform_joints"] = detail::points_json<6>(g.platform);
   j["stroke"] = {{"min", detail::vector_json<6>(g.min_length)}, {"max", detail::vector_json<6>(g.max_length)}};
   j["length_offset"] = detail::vector_json<6>(g.length_offset);
-  if (robot.models_leg_offsets) j["leg_offset_sq"] = detail::vector_json<6>(g.leg_offset_sq);
+  if (robot.stewart_description().models_leg_offsets) j["leg_offset_sq"] = detail::vector_json<6>(g.leg_offset_sq);
   const Vec6<double> h = g.home.to_xyz_rpy() + Vec6<double>::Zero();
   j["home"] = {{"x", h(0)}, {"y", h(1)}, {"z", h(2)}, {"rx", h(3)}, {"ry", h(4)}, {"rz", h(5)}};
 }
@@ -145,7 +145,7 @@ FkReport<double> stewart_reached(const StewartGeometry<double>& g, const Vec6<do
 const std::vector<ParameterSpec>& StewartFamilyErrorModel::parameter_specs(const Robot& robot) const {
   static const std::vector<ParameterSpec> table = stewart_table();
   static const std::vector<ParameterSpec> with_leg_offsets = stewart_table_with_leg_offsets();
-  return robot.models_leg_offsets ? with_leg_offsets : table;
+  return robot.stewart_description().models_leg_offsets ? with_leg_offsets : table;
 }
 
 AnyCalibrationTable StewartFamilyTable::machine_table(const CalibrationModel& model) const {

@@ -27,7 +27,7 @@ Identification StewartFamilyPipeline::identify_own(const Robot& robot, const Pos
   so.estimator = estimator_options(options, estimator);
   const int parameters = stewart_parameter_count(robot);
   narrative << "identify: " << options.data_file << ", robot " << robot.name << " (" << parameters << "-parameter model of seed 001"
-            << (robot.models_leg_offsets ? " with leg offsets dsq1..dsq6" : "") << ")\n";
+            << (robot.stewart_description().models_leg_offsets ? " with leg offsets dsq1..dsq6" : "") << ")\n";
   const StewartCalibration c = calibrate_stewart(robot, data, so);
   narrative << "  cal nodes " << c.nodes << ", rank " << c.rank << " of " << parameters
             << ", condition number (column-scaled) "
