@@ -368,17 +368,26 @@ template <class S> bool nominal_ups_joints(const Vec3<S>& A1, const Mat3<S>& E, 
 // were ~1.4k of a limb's ~5k instructions (callgrind). The same branch as
 // nominal_ups_joints (cos x1, cos x4 ≥ 0); `sine[2]`, `cosine[2]` (the P
 // joint) are set to 0, 1.
+// Its U-P part: the leg from A1 to `point` about the reference axes E — its
+// length, and the U joints' sines and cosines (close_ups_on_centre's start
+// on a ball's centre too). False for a point on the U centre.
 template <class S>
-bool nominal_ups_start(const Vec3<S>& A1, const Mat3<S>& E, const Pose<S>& target, S& length, S* sine, S* cosine) {
-  Vec3<S> v = E.transpose() * (target.p - A1);
+bool nominal_leg_start(const Vec3<S>& A1, const Mat3<S>& E, const Vec3<S>& point, S& length, S* sine, S* cosine) {
+  Vec3<S> v = E.transpose() * (point - A1);
   length = v.norm();
   if (!(length > S(0))) return false;
   v /= length;
+  const S one(1);
+  cosine[1] = hybrid_exact_detail::direction(-v(1), v(2), sine[0], cosine[0]);  // x1 = asin v0: cos x1 = √(v1² + v2²)
+  sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);
+  return true;
+}
+
+template <class S>
+bool nominal_ups_start(const Vec3<S>& A1, const Mat3<S>& E, const Pose<S>& target, S& length, S* sine, S* cosine) {
+  if (!nominal_leg_start(A1, E, target.p, length, sine, cosine)) return false;
   using hybrid_exact_detail::direction;
   const S one(1), zero(0);
-  const S h0 = direction(-v(1), v(2), sine[0], cosine[0]);
-  sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);  // x1 = asin v0: cos x1 = √(v1² + v2²)
-  cosine[1] = h0;
   sine[2] = zero, cosine[2] = one;
   // R = Ry(−x1)·Rx(−x0)·Eᵀ·R_target = Rx(x3)·Ry(x4)·Rz(x5).
   Mat3<S> Rx, Ry;
@@ -621,6 +630,25 @@ template <class S> bool step_sin_cos(S d, S& sine, S& cosine) {
 // 1/8: no halvings), instead of a sin_cos of every angle at every evaluation.
 // x += a Newton step (revolute joints scaled by L), a revolute joint's sine
 // and cosine turned with it; false for a diverged step.
+// The stopping rules of both Newtons (close_serial, close_ups_on_centre):
+// closed within HybridExactTolerance::closure, or at rounding (from the
+// third iterate, below `floor` and no longer halving) ...
+template <class S> bool newton_closed(int it, S err, S previous) {
+  return err <= HybridExactTolerance<S>::closure ||
+         (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous);
+}
+// ... or, just after a step, closed by prediction: Newton converges
+// quadratically here, r_{k+1} ≈ K·r_k² with K ≈ r_k / r_{k−1}² seen on the
+// last step; when the residual this step leaves, r_k³ / r_{k−1}², is below
+// the tolerance (and the last step did shrink it a hundredfold, so the
+// regime is quadratic), the chain is closed without evaluating it again —
+// one chain evaluation of three saved per closure. The tests check the
+// result against the FK to 1e-9 mm.
+template <class S> bool newton_predicts_closed(int it, S err, S previous) {
+  return it > 0 && err < S(0.01) * previous &&
+         err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure;
+}
+
 template <class S>
 inline bool take_newton_step(const Vec6<S>& step, const bool* prismatic, S L, S* x, S* sine, S* cosine) {
   for (int j = 0; j < 6; ++j) {
@@ -682,8 +710,7 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
         J.template block<3, 1>(0, j) = (a.cross(end.p) + J.template block<3, 1>(0, j)) / L;
       }
     }
-    const bool closed = it > 0 && (err <= HybridExactTolerance<S>::closure ||
-                                   (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous));
+    const bool closed = it > 0 && newton_closed(it, err, previous);
     if (closed && !keep_factorisation) return Status::Ok;
     if (!lu.factor() || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
     if constexpr (kStream)
@@ -691,15 +718,7 @@ Status close_serial(Ends ends, const bool* prismatic, const Pose<S>& target, S L
     if (closed || (it == 0 && err <= HybridExactTolerance<S>::closure)) return Status::Ok;  // (or the start was the solution)
     if (it >= HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
     if (!take_newton_step(lu.solve(e), prismatic, L, x, sine, cosine)) return Status::NotConverged;  // diverged
-    // Newton converges quadratically here, r_{k+1} ≈ K·r_k² with K ≈
-    // r_k / r_{k−1}² seen on the last step: when the residual this step
-    // leaves, r_k³ / r_{k−1}², is below the tolerance (and the last step did
-    // shrink it a hundredfold, so the regime is quadratic), the chain is
-    // closed without evaluating it again — one chain evaluation of three
-    // saved per closure. The tests check the result against the FK to 1e-9 mm.
-    if (it > 0 && err < S(0.01) * previous &&
-        err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure)
-      return Status::Ok;
+    if (newton_predicts_closed(it, err, previous)) return Status::Ok;
     previous = err;
   }
 }
@@ -819,7 +838,7 @@ Vec3<S> ups_centre_at(const HybridUpsLimb<S>& limb, const HybridUpsCentreChain<S
 // From `warm` if given, valid and within kHybridWarmReach of its last
 // centre: its first step from the kept factorisation and the known residual
 // (the centre's move), as close_from_previous; otherwise from the nominal
-// closed form on the centre (nominal_ups_start's leg direction). The
+// closed form on the centre (nominal_leg_start). The
 // solution and the last factorisation are kept in `warm`.
 template <class S>
 Status close_ups_on_centre(const HybridUpsLimb<S>& limb, const HybridUpsCentreChain<S>& chain,
@@ -853,22 +872,13 @@ Status close_ups_on_centre(const HybridUpsLimb<S>& limb, const HybridUpsCentreCh
       warmed = factored = true;
     }
   }
-  if (!warmed) {  // the nominal U-P: the leg's direction about the reference axes
-    Vec3<S> v = limb.axes.transpose() * (centre - limb.origin);
-    x2 = v.norm();
-    if (!(x2 > S(0))) return Status::Unreachable;
-    v /= x2;
-    const S one(1);
-    cosine[1] = direction(-v(1), v(2), sine[0], cosine[0]);
-    sine[1] = v(0) < -one ? -one : v(0) > one ? one : v(0);
-  }
+  if (!warmed && !nominal_leg_start(limb.origin, limb.axes, centre, x2, sine, cosine)) return Status::Unreachable;
   for (int it = warmed ? 1 : 0;; ++it) {
     Mat3<S> J;
     const Vec3<S> e = centre - ups_centre_at(limb, chain, x2, sine, cosine, J);
     const S err = e.cwiseAbs().maxCoeff();
     if (!(err == err)) return Status::NotConverged;
-    bool closed = err <= HybridExactTolerance<S>::closure ||
-                  (it >= 2 && err <= HybridExactTolerance<S>::floor && err > S(0.5) * previous);
+    bool closed = newton_closed(it, err, previous);
     if (!closed) {
       if (it >= HybridExactTolerance<S>::max_iterations) return Status::NotConverged;
       J.col(0) /= L;
@@ -876,10 +886,7 @@ Status close_ups_on_centre(const HybridUpsLimb<S>& limb, const HybridUpsCentreCh
       if (!lu.factor(J) || !(lu.pivot_ratio() > Tolerance<S>::singular_pivot_ratio)) return Status::Singular;
       factored = true;
       if (!step(e)) return Status::NotConverged;
-      // close_serial's rule: quadratic convergence seen, the next residual
-      // (err³ / previous²) below the tolerance — closed without evaluating.
-      closed = it > 0 && err < S(0.01) * previous &&
-               err * (err / previous) * (err / previous) <= HybridExactTolerance<S>::closure;
+      closed = newton_predicts_closed(it, err, previous);
       previous = err;
     }
     if (closed) {
