@@ -35,14 +35,21 @@ TEST(identifyIdentifiability, RankBySvdWithStatedTolerance) {
   MatrixXd H = gaussian(50, 6, rng);
   const RankReport full = rank_by_svd(H);
   EXPECT_EQ(full.rank, 6);
-  EXPECT_DOUBLE_EQ(full.rcond, 50 * std::numeric_limits<double>::epsilon());
+  EXPECT_DOUBLE_EQ(full.rcond, kRankThreshold);  // the one rule (rank_tolerance.hpp)
   EXPECT_DOUBLE_EQ(full.tolerance, full.rcond * full.singular_values(0));
   EXPECT_NEAR(full.condition_number, full.singular_values(0) / full.singular_values(5), 1e-12);
   H.col(5) = 0.5 * H.col(0) - 3.0 * H.col(2);
   const RankReport def = rank_by_svd(H);
   EXPECT_EQ(def.rank, 5);
   EXPECT_TRUE(std::isinf(def.condition_number));
-  // an explicit, looser tolerance: a near-dependency at 1e-6 counts as dependent
+  // A near-dependency at 1e-12 of the column: dependent under the default
+  // (above rounding's max(n, m)·ε = 1.1e-14, below kRankThreshold) …
+  const MatrixXd exact = H;
+  H.col(5) += 1e-12 * H.col(5).norm() * gaussian(50, 1, rng).normalized();
+  EXPECT_EQ(rank_by_svd(H).rank, 5);
+  EXPECT_EQ(rank_by_svd(H, 50 * std::numeric_limits<double>::epsilon()).rank, 6);
+  // … and an explicit, looser tolerance: a near-dependency at 1e-6 counts as dependent
+  H = exact;
   H.col(5) += 1e-7 * gaussian(50, 1, rng);
   EXPECT_EQ(rank_by_svd(H).rank, 6);
   EXPECT_EQ(rank_by_svd(H, 1e-5).rank, 5);

@@ -28,6 +28,7 @@
 #include "effects/base_fit.hpp"
 #include "families/family.hpp"
 #include "estimate/least_squares_step.hpp"
+#include "estimate/scaled_design.hpp"
 #include "kincal/identify/decompositions.hpp"
 #include "kincal/identify/effect_calibration.hpp"
 #include "kincal/identify/effects.hpp"
@@ -293,7 +294,7 @@ struct NodeTwist {
 
 NodeTwist node_twist(const NodeData& n, const VectorXd& r) {
   NodeTwist out;
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(n.M);
+  const detail::ScaledPivotedQr qr(n.M);
   const bool whole = out.whole = qr.rank() == 6;
   out.twist = whole ? VectorXd(qr.solve(r)) : VectorXd(Eigen::CompleteOrthogonalDecomposition<MatrixXd>(n.M).solve(r));
   const Eigen::PartialPivLU<Mat6<double>> J(n.effect.joint_twist);
@@ -806,18 +807,6 @@ void DiagnosisRun::rank_candidates() {
   d.ranking = ranked;
 }
 
-// An orthonormal basis of the span of A's columns, of A's rank by a
-// column-pivoted QR: its Householder Q applied to the first rank unit
-// vectors, the thin factor. Forming the whole n × n Q and keeping its first
-// columns (600 × 600 for a 6-RUS's cal rows, six times per diagnosis) was
-// 79 M of the 471 M instructions of BM_DiagnoseRus6's diagnose(); the two
-// differ by the order of the rounding only (1e-17 in Q, 1e-15 relative in
-// the shares; #33).
-MatrixXd column_space(const MatrixXd& A) {
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(A);
-  return qr.householderQ() * MatrixXd::Identity(A.rows(), qr.rank());
-}
-
 // Candidates nearly collinear with each other (#31): `confounded` measures
 // an effect against the base; two effects can each stand out from the base
 // and still be one another's image (the hybrid's wrist scale and compliance),
@@ -826,7 +815,10 @@ MatrixXd column_space(const MatrixXd& A) {
 // (unit) columns inside the span of the other's is the measure, both ways.
 void DiagnosisRun::name_collinear_candidates() {
   constexpr double kCollinear = 0.9;
-  const MatrixXd Q = column_space(cal.H);
+  // Orthonormal bases of spans by the scaled pivoted QR's thin Q (forming
+  // the whole n × n Q, 600 × 600 for a 6-RUS's cal rows, was 79 M of the
+  // 471 M instructions of BM_DiagnoseRus6's diagnose(); #33).
+  const MatrixXd Q = detail::ScaledPivotedQr(cal.H).column_space();
   // Each effect's columns beyond the base (unit norm), and an orthonormal
   // basis of their span: one QR per effect, not one per pair and direction.
   struct Beyond {
@@ -843,7 +835,7 @@ void DiagnosisRun::name_collinear_candidates() {
     if (keep.empty()) continue;
     MatrixXd U(R.rows(), Index(keep.size()));
     for (std::size_t j = 0; j < keep.size(); ++j) U.col(Index(j)) = R.col(keep[j]).normalized();
-    MatrixXd QU = column_space(U);
+    MatrixXd QU = detail::ScaledPivotedQr(U).column_space();
     beyond.push_back({e->name(), std::move(U), std::move(QU)});
   }
   // The mean share of A's columns (unit) inside the span of B's.

@@ -11,6 +11,8 @@
 
 #include <Eigen/Dense>
 
+#include "estimate/scaled_design.hpp"
+
 namespace kincal::identify {
 
 namespace {
@@ -119,13 +121,13 @@ double quadratic_leak(const Neighbourhoods& nb, const std::vector<VectorXd>& pla
   const Index dim = place.front().size();
   MatrixXd L(Index(n), dim + 1);
   for (std::size_t i = 0; i < n; ++i) L(Index(i), 0) = 1, L.row(Index(i)).tail(dim) = place[i].transpose();
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(L);
+  const detail::ScaledPivotedQr qr(L);
   double worst = 0;
   for (Index a = 0; a < dim; ++a)
     for (Index b = a; b < dim; ++b) {
       VectorXd f = VectorXd::Zero(Index(n));
       for (std::size_t i = 0; i < n; ++i) f(Index(i)) = place[i](a) * place[i](b);
-      const VectorXd beyond = f - L * qr.solve(f);
+      const VectorXd beyond = f - qr.fitted(f);
       const double energy = beyond.squaredNorm();
       if (!(energy > 1e-12 * (1 + f.squaredNorm()))) continue;
       std::vector<VectorXd> fv(n);
@@ -252,8 +254,8 @@ NoiseEstimate estimate_noise_in_joint_space(const NoiseData& data, const NoiseEs
     if (covariates > 0) L.row(Index(i)).tail(covariates) = (*cov)[i].transpose();
     R.row(Index(i)) = data.residual[i].transpose();
   }
-  const Eigen::ColPivHouseholderQR<MatrixXd> linear(L);
-  const double mean_square = (R - L * linear.solve(R)).squaredNorm() /
+  const detail::ScaledPivotedQr linear(L);
+  const double mean_square = (R - linear.fitted(R)).squaredNorm() /
                              (double(std::max<Index>(1, Index(n) - linear.rank())) * k *
                               std::max(1e-6, 1.0 - data.leverage));
   const double misfit = std::max(0.0, mean_square - out.sigma * out.sigma);

@@ -163,18 +163,14 @@ namespace {
 // model whose effect is nearly collinear with the base (the hybrid's
 // compliance, 99.9 % confounded) is tested like any other.
 LinearProblem on_independent_columns(const LinearProblem& problem) {
-  MatrixXd scaled = problem.H;
-  for (Index j = 0; j < scaled.cols(); ++j)
-    if (scaled.col(j).norm() > 0) scaled.col(j) /= scaled.col(j).norm();
-  Eigen::ColPivHouseholderQR<MatrixXd> qr(scaled);
-  qr.setThreshold(detail::kRankThreshold);  // as the diagnosis ranks its designs
-  const Index rank = qr.rank();
+  const std::vector<Index> independent = detail::ScaledPivotedQr(problem.H).independent_columns();
+  const Index rank = Index(independent.size());
   if (rank == problem.H.cols()) return problem;
   LinearProblem out = problem;
   out.H.resize(problem.H.rows(), rank);
   out.names.clear();
   for (Index k = 0; k < rank; ++k) {
-    const Index j = qr.colsPermutation().indices()(k);
+    const Index j = independent[std::size_t(k)];
     out.H.col(k) = problem.H.col(j);
     if (std::size_t(j) < problem.names.size()) out.names.push_back(problem.names[std::size_t(j)]);
   }

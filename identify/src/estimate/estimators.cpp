@@ -218,13 +218,9 @@ PartialRidgeGcv::PartialRidgeGcv(const MatrixXd& X, const VectorXd& z, Index pen
   if (X.cols() > penalised) {
     // The free columns' span by a rank-revealing QR (column-scaled, as every
     // design here: effect columns are per unit of their input).
-    MatrixXd E = X.rightCols(X.cols() - penalised);
-    for (Index j = 0; j < E.cols(); ++j)
-      if (E.col(j).norm() > 0) E.col(j) /= E.col(j).norm();
-    Eigen::ColPivHouseholderQR<MatrixXd> qr(E);
-    qr.setThreshold(detail::kRankThreshold);
+    const detail::ScaledPivotedQr qr(X.rightCols(X.cols() - penalised));
     free_rank_ = qr.rank();
-    const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(X.rows(), free_rank_);
+    const MatrixXd Q = qr.column_space();
     A -= Q * (Q.transpose() * A);
     zt -= Q * (Q.transpose() * zt);
   }

@@ -66,8 +66,8 @@ struct ScaledSvd {
 // orthonormal, so H·D⁻¹ = Q·(R·D⁻¹) has the singular values and right
 // singular vectors of the m × m matrix R·D⁻¹, and H's column norms are R's.
 // One Householder QR (2nm² flops) and a small SVD instead of bidiagonalising
-// the whole tall design (issue #13); `rows` is n, for the default rcond.
-ScaledSvd scaled_svd_of_factor(const MatrixXd& R, Index rows, double rcond, ColumnScaling scaling, bool want_v) {
+// the whole tall design (issue #13).
+ScaledSvd scaled_svd_of_factor(const MatrixXd& R, double rcond, ColumnScaling scaling, bool want_v) {
   ScaledSvd out;
   out.scale = column_scales(R, scaling);
   const MatrixXd Rs = R * out.scale.cwiseInverse().asDiagonal();
@@ -79,7 +79,7 @@ ScaledSvd scaled_svd_of_factor(const MatrixXd& R, Index rows, double rcond, Colu
     Eigen::BDCSVD<MatrixXd> svd(Rs);
     out.s = svd.singularValues();
   }
-  out.rcond = effective_rcond(rcond, rows, R.cols());
+  out.rcond = effective_rcond(rcond);
   const double smax = out.s.size() > 0 ? out.s(0) : 0.0;
   out.tolerance = out.rcond * smax;
   out.rank = 0;
@@ -90,7 +90,7 @@ ScaledSvd scaled_svd_of_factor(const MatrixXd& R, Index rows, double rcond, Colu
 }
 
 ScaledSvd scaled_svd(const MatrixXd& H, double rcond, ColumnScaling scaling, bool want_v) {
-  return scaled_svd_of_factor(triangular_factor(H), H.rows(), rcond, scaling, want_v);
+  return scaled_svd_of_factor(triangular_factor(H), rcond, scaling, want_v);
 }
 
 RankReport report_of(const ScaledSvd& sv, Index rows, Index cols, ColumnScaling scaling) {
@@ -178,11 +178,6 @@ std::vector<Index> unidentifiable_from(const ScaledSvd& sv) {
 
 }  // namespace
 
-double effective_rcond(double rcond, Eigen::Index rows, Eigen::Index cols) {
-  if (rcond >= 0) return rcond;
-  return static_cast<double>(std::max(rows, cols)) * std::numeric_limits<double>::epsilon();
-}
-
 Eigen::VectorXd column_scales(const Eigen::MatrixXd& H, ColumnScaling scaling) {
   VectorXd d = VectorXd::Ones(H.cols());
   if (scaling == ColumnScaling::UnitNorm) {
@@ -206,7 +201,7 @@ Eigen::MatrixXd triangular_factor(const Eigen::MatrixXd& H) {
 }
 
 RankReport rank_of_factor(const Eigen::MatrixXd& R, Eigen::Index rows, double rcond, ColumnScaling scaling) {
-  return report_of(scaled_svd_of_factor(R, rows, rcond, scaling, false), rows, R.cols(), scaling);
+  return report_of(scaled_svd_of_factor(R, rcond, scaling, false), rows, R.cols(), scaling);
 }
 
 ColumnSelection reconstruct_by_column_selection(const Eigen::MatrixXd& H, const std::vector<Index>& xi,
@@ -227,7 +222,7 @@ ColumnSelection reconstruct_by_column_selection(const Eigen::MatrixXd& H, const 
   }
   ColumnSelection out;
   out.tolerance = tolerance >= 0 ? tolerance
-                                 : effective_rcond(kDefaultRcond, n, m) * std::sqrt(static_cast<double>(m));
+                                 : effective_rcond(kDefaultRcond) * std::sqrt(static_cast<double>(m));
   MatrixXd Q(n, std::min(n, static_cast<Index>(xi.size() + eta.size())));
   Index q = 0;
   VectorXd r(n);

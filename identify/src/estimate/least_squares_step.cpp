@@ -11,7 +11,7 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scale(X)) {
+ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scales(X)) {
   cod_.setThreshold(kRankThreshold);
   cod_.compute(X * scale_.cwiseInverse().asDiagonal());
 }
@@ -26,7 +26,7 @@ double ScaledLeastSquares::mean_leverage(const MatrixXd& Xt) const {
   return (St * cod_.pseudoInverse()).squaredNorm() / double(Xt.rows());
 }
 
-AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X0_(X0), scale0_(column_scale(X0)) {
+AppendedColumnsLeastSquares::AppendedColumnsLeastSquares(const MatrixXd& X0) : X0_(X0), scale0_(column_scales(X0)) {
   qr0_.compute(X0 * scale0_.cwiseInverse().asDiagonal());
   const Index p0 = X0.cols();
   if (X0.rows() >= p0 && p0 > 0) {
@@ -69,7 +69,7 @@ VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y
     rank = ls.rank();
     return ls.solve(y);
   }
-  const VectorXd scale_g = column_scale(G);
+  const VectorXd scale_g = column_scales(G);
   // Qᵀ applied to the scaled G and to y in one pass (its block reflector
   // formed once).
   MatrixXd Gy(n, k + 1);
@@ -105,7 +105,7 @@ VectorXd AppendedColumnsLeastSquares::solve(const MatrixXd& G, const VectorXd& y
 
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y) { return ScaledLeastSquares(X).solve(y); }
 
-DescentStep::DescentStep(const MatrixXd& X, const VectorXd& y) : scale_(column_scale(X)), y_(y) {
+DescentStep::DescentStep(const MatrixXd& X, const VectorXd& y) : scale_(column_scales(X)), y_(y) {
   S_ = X * scale_.cwiseInverse().asDiagonal();
   const Index p = S_.cols();
   N_ = MatrixXd::Zero(p, p);
@@ -135,7 +135,7 @@ VectorXd DescentStep::solve(double damping) const {
 VectorXd scaled_least_squares(const MatrixXd& X, const VectorXd& y, double damping) {
   if (!(damping > 0)) return scaled_least_squares(X, y);
   const Index n = X.rows(), p = X.cols();
-  const VectorXd scale = column_scale(X);
+  const VectorXd scale = column_scales(X);
   MatrixXd A(n + p, p);
   A.topRows(n) = X * scale.cwiseInverse().asDiagonal();
   A.bottomRows(p) = std::sqrt(damping) * MatrixXd::Identity(p, p);

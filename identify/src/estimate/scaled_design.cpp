@@ -6,17 +6,31 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-VectorXd column_scale(const MatrixXd& X) {
-  VectorXd scale(X.cols());
-  for (Index j = 0; j < X.cols(); ++j) {
-    const double n = X.col(j).norm();
-    scale(j) = n > 0 ? n : 1.0;
-  }
-  return scale;
+ScaledPivotedQr::ScaledPivotedQr(const MatrixXd& X) : scale_(column_scales(X)) {
+  qr_.setThreshold(kRankThreshold);
+  qr_.compute(X * scale_.cwiseInverse().asDiagonal());
+}
+
+MatrixXd ScaledPivotedQr::solve(const MatrixXd& Y) const { return scale_.cwiseInverse().asDiagonal() * qr_.solve(Y); }
+
+MatrixXd ScaledPivotedQr::fitted(const MatrixXd& Y) const {
+  MatrixXd QtY = qr_.householderQ().adjoint() * Y;
+  QtY.bottomRows(QtY.rows() - qr_.rank()).setZero();
+  return qr_.householderQ() * QtY;
+}
+
+MatrixXd ScaledPivotedQr::column_space() const {
+  return qr_.householderQ() * MatrixXd::Identity(qr_.rows(), qr_.rank());
+}
+
+std::vector<Index> ScaledPivotedQr::independent_columns() const {
+  std::vector<Index> out;
+  for (Index k = 0; k < qr_.rank(); ++k) out.push_back(qr_.colsPermutation().indices()(k));
+  return out;
 }
 
 ScaledDesign::ScaledDesign(const MatrixXd& X, bool with_directions)
-    : scale_(column_scale(X)), S_(X * scale_.cwiseInverse().asDiagonal()) {
+    : scale_(column_scales(X)), S_(X * scale_.cwiseInverse().asDiagonal()) {
   svd_.compute(S_, with_directions ? Eigen::ComputeThinV : 0);
   s_ = svd_.singularValues();
   while (rank_ < s_.size() && s_(rank_) > kRankThreshold * s_(0)) ++rank_;

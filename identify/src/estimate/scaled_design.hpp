@@ -6,29 +6,48 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "kincal/identify/decompositions.hpp"
+#include "kincal/identify/identifiability.hpp"
+#include "kincal/identify/rank_tolerance.hpp"
 
 namespace kincal::identify::detail {
 
-// The one rank rule of identify/'s least-squares solves and of the
-// statistics read from them: on the column-scaled design S = X·D⁻¹ (unit
-// column norms, so mm, rad and an effect's units weigh alike), a direction
-// counts when its singular value — or, in a rank-revealing QR, its pivot —
-// exceeds kRankThreshold times the largest. Why 1e-10 and not rounding's
-// max(n, p)·ε (rank_tolerance.hpp, the public identifiability report):
-// a design's columns are not exact to ε — they come through iterated
-// forward kinematics (converged to ~1e-9 mm), automatic or finite
-// differences and the linearisation itself — so a direction below 1e-10 of
-// the largest is the design's own error, not the machine; and its
-// coefficient's standard error would exceed 1e10 times the noise's, which no
-// data set of a machine determines. The solve (ScaledLeastSquares, the
-// descent's step) and the rank, test degrees of freedom and covariance
-// reported for it then agree on which directions were fitted.
-inline constexpr double kRankThreshold = 1e-10;
+// The one rank rule, kRankThreshold (rank_tolerance.hpp, with its reason),
+// judged on the column-scaled design by each factorisation below, by
+// ScaledLeastSquares and the descent's step (least_squares_step.hpp), and
+// by the public identifiability report and estimators at their default
+// rcond.
 
-// Column norms D (1 for a zero column): the scaling of every solve here.
-Eigen::VectorXd column_scale(const Eigen::MatrixXd& X);
+// The scaling of every solve here: D = column_scales(X) (identifiability.hpp;
+// column norms, 1 for a zero column).
+
+// A column-pivoted QR of S = X·D⁻¹ with the rank rule: for a solve that
+// needs only the fitted part, a basis of the span or which columns are
+// independent, where an SVD's directions are not needed. The pivots are
+// judged as ScaledDesign's singular values are (|r_kk| > kRankThreshold ·
+// |r_11|); the two agree on every design whose gap at the rank is wider
+// than the pivots' slack (a factor ≤ √p of the singular values').
+class ScaledPivotedQr {
+ public:
+  explicit ScaledPivotedQr(const Eigen::MatrixXd& X);
+  Eigen::Index rank() const { return qr_.rank(); }
+  // The least-squares coefficients of X (its own units); at a rank below
+  // X's columns, the basic solution (the dependent columns' coefficients 0).
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& Y) const;
+  // X·solve(Y): Y's part inside the span of X's columns.
+  Eigen::MatrixXd fitted(const Eigen::MatrixXd& Y) const;
+  // An orthonormal basis of that span (rows × rank): the Householder Q
+  // applied to the first rank unit vectors, never the whole rows × rows Q.
+  Eigen::MatrixXd column_space() const;
+  // The columns a basis of the span is made of, in pivot order (rank of them).
+  std::vector<Eigen::Index> independent_columns() const;
+
+ private:
+  Eigen::VectorXd scale_;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;
+};
 
 // The SVD of S = X·D⁻¹, factored once. The rank by kRankThreshold; the
 // right singular vectors V only when asked (at construction, or on first

@@ -176,7 +176,8 @@ Eigen::MatrixXd null_space(const Eigen::MatrixXd& C, Eigen::Index columns) {
       if (held(j) == 0) N(j, c++) = 1.0;
     return N;
   }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(C, Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(C, Eigen::ComputeFullV);
+  svd.setThreshold(kRankThreshold);
   return svd.matrixV().rightCols(columns - svd.rank());
 }
 

@@ -836,9 +836,7 @@ struct DesignAssessor {
     a.predicted_test_um = 1e3 * std::sqrt(tr / double(evaluation_poses));
     // Confounding: the share of each effect column's energy inside the base's span.
     if (p > base_p) {
-      const MatrixXd base = Ad.leftCols(base_p) * column_scales(Ad.leftCols(base_p)).cwiseInverse().asDiagonal();
-      Eigen::ColPivHouseholderQR<MatrixXd> qr(base);
-      qr.setThreshold(detail::kRankThreshold);
+      const detail::ScaledPivotedQr base(Ad.leftCols(base_p));
       Index col = base_p;
       for (const Effect* e : effects) {
         const Index k = Index(e->parameter_names(robot).size());
@@ -847,7 +845,7 @@ struct DesignAssessor {
         for (Index j = col; j < col + k; ++j) {
           const double g2 = Ad.col(j).squaredNorm();
           if (!(g2 > 1e-18 * Ad.leftCols(base_p).squaredNorm())) continue;
-          const VectorXd inside = base * qr.solve(Ad.col(j));
+          const VectorXd inside = base.fitted(Ad.col(j));
           sum += std::min(1.0, inside.squaredNorm() / g2);
           ++counted;
         }

@@ -36,7 +36,7 @@ struct RankReport {
 };
 
 // Numerical rank: #{ s_j > rcond · s_max } of the (scaled) design,
-// rcond < 0 → max(n, m)·ε.
+// rcond < 0 → kRankThreshold (rank_tolerance.hpp).
 // Computed from the triangular factor (triangular_factor): the same numbers
 // as an SVD of the tall design, at a fraction of the work.
 RankReport rank_by_svd(const Eigen::MatrixXd& H, double rcond = kDefaultRcond,
@@ -69,7 +69,7 @@ struct ColumnSelection {
 // column only if rank([H h_η,j]) = rank(H) + 1 (Step 2). The rank test is the
 // distance of the unit-norm column from the span of the kept ones
 // (Gram–Schmidt with re-orthogonalisation), independent when
-// distance > tolerance. tolerance < 0 selects max(n, m)·ε·√m: rank_by_svd's
+// distance > tolerance. tolerance < 0 selects kRankThreshold·√m: the
 // default rcond times √m, the largest s_max unit-norm columns can have.
 ColumnSelection reconstruct_by_column_selection(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& xi,
                                                 const std::vector<Eigen::Index>& eta,

@@ -4,6 +4,7 @@
 #include "kincal/identify/hybrid_calibration.hpp"
 
 #include "estimate/least_squares_step.hpp"
+#include "estimate/scaled_design.hpp"
 
 #include "kincal/identify/outliers.hpp"
 
@@ -242,7 +243,7 @@ HybridCalibration calibrate_hybrid(const Robot& nominal, const PoseTable& data,
                        "hybrid calibration: error Jacobian at node '" + n.id + "' failed (" + to_string(st) + ")");
     gauge.design_into(n.commanded, B.leftCols(6), Hxi.middleRows(9 * k, 9));
   }
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(Hxi);
+  const detail::ScaledPivotedQr qr(Hxi);
   if (qr.rank() < 6)
     throw InputError(data.file, 0, 0,
                      "hybrid calibration: H_xi is rank-deficient (rank " + std::to_string(qr.rank()) + " < 6)");
@@ -575,7 +576,7 @@ IdentifiabilityHint hybrid_identifiability_hint(const Robot& nominal, const Hybr
   // direction the measurements (nearly) do not see, one per dropped column.
   MatrixXd K(H.rows(), static_cast<Index>(cal.kept.size()));
   for (std::size_t c = 0; c < cal.kept.size(); ++c) K.col(static_cast<Index>(c)) = H.col(cal.kept[c]);
-  const Eigen::ColPivHouseholderQR<MatrixXd> qr(K);
+  const detail::ScaledPivotedQr qr(K);
   std::vector<NullCombination> combos;
   for (const Index j : cal.dropped) {
     const double hj = H.col(j).norm();
@@ -817,7 +818,7 @@ PoseErrorReport hybrid_residuals(const Robot& nominal, const HybridCompensation*
     r.id = row.id;
     r.group = data.has_layer && row.layer ? "layer " + std::to_string(*row.layer) : std::string();
     r.role = row.role;
-    r.error = P.colPivHouseholderQr().solve(dp);
+    r.error = detail::ScaledPivotedQr(P).solve(dp);
     rows.push_back(r);
   }
   PoseErrorReport report = make_pose_error_report(std::move(rows), skipped);
