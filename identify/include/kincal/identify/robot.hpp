@@ -13,43 +13,18 @@
 
 #include <Eigen/Core>
 
-#include "kincal/core/hybrid.hpp"
 #include "kincal/core/pose.hpp"
-#include "kincal/core/rus6.hpp"
 #include "kincal/core/status.hpp"
-#include "kincal/core/stewart.hpp"
+// A family's part of a Robot — core's geometry plus the host-side data only
+// that family has, in the family's own header; Robot::family_data holds
+// exactly one of them (the registry line of this layer, below).
+#include "kincal/identify/hybrid_description.hpp"
+#include "kincal/identify/rus6_description.hpp"
+#include "kincal/identify/stewart_description.hpp"
 
 namespace kincal::identify {
 
 class FormulaCandidate;  // effects/formula_candidate.hpp
-
-inline constexpr const char* kStewartFamily = "stewart-6ups";
-inline constexpr const char* kHybridFamily = "hybrid-3ups-up-3r";
-inline constexpr const char* kRus6Family = "rus6";
-
-// The design inputs of a hybrid machine from which HybridGeometry's derived
-// members (workpiece frame, tool offset, home) follow, exactly as core's
-// make_hybrid_seed000 derives them (reference_machines.hpp).
-struct HybridDesign {
-  Mat3<double> base_joints = Mat3<double>::Zero();      // A1i in {R0}, columns, mm
-  Mat3<double> platform_joints = Mat3<double>::Zero();  // a_i in the platform frame, columns, mm
-  double platform_to_wrist = 0;  // |A64 Q|, mm
-  double wrist_link = 0;         // |Q P0|, mm
-  double tool_length = 0;        // |P0 P|, mm
-  double beta = 0;               // structural angle β, rad
-  double reference_extension = 0;  // c = |A0 A64| at the reference pose, mm
-  Vec6<double> min_joint = Vec6<double>::Zero(), max_joint = Vec6<double>::Zero();
-  double min_extension = 0, max_extension = 0;
-  Vec6<double> joint_offset = Vec6<double>::Zero();
-};
-
-// Builds the geometry: wR0 = Rot(y, π − β)·Rot(z, π/2) (seed 000 Eq. (8)); at
-// the reference configuration (θ1 = θ2 = 0, c = reference_extension,
-// wrist angles (0, β, 0)) the tool point P is the origin of {R} and the tool
-// frame is aligned with {R}.
-HybridGeometry<double> make_hybrid_geometry(const HybridDesign& d);
-// The inverse: reads the design inputs back (β from the workpiece rotation).
-HybridDesign hybrid_design_of(const HybridGeometry<double>& g);
 
 // A number a family offers its formula effects per joint (GUIDE "Effects
 // written as formulas": "what the family offers"): `name` is this joint's in
@@ -59,39 +34,11 @@ struct FamilyFormulaVariable {
   std::string description;  // what it is, in its unit (`kincal effects`)
 };
 
-// A family's part of a Robot: core's geometry plus the host-side data only
-// that family has. Robot::family_data holds exactly one of them.
-
-// The 6-UPS (stewart-6ups).
-struct StewartDescription {
-  StewartGeometry<double> geometry;
-  // The optional description key `leg_offset_sq` (mm², six: the squared
-  // distance of each leg's prismatic line from its U centre,
-  // core/stewart.hpp). Given, even as zeros, the identification also fits
-  // the six (dsq1..dsq6, after seed 001's 42); absent, they are not modelled.
-  bool models_leg_offsets = false;
-};
-
-// The hybrid (hybrid-3ups-up-3r).
-struct HybridDescription {
-  HybridGeometry<double> geometry;
-  double gauge_radius = 0.0;  // |P0 Pj| of seed 000's three-target gauge, mm
-  // Seed 000's joint/link source errors Δχ (150, in the order of
-  // HybridErrorModel, identify/hybrid_error_model.hpp), set from PARAMS.csv.
-  // Empty = none; then the machine is the (possibly modified) ideal geometry.
-  Eigen::VectorXd source_errors;
-};
-
-// The 6-RUS (rus6): its geometry is all it has.
-struct Rus6Description {
-  Rus6Geometry<double> geometry;
-};
-
 struct Robot {
   std::string name;
   // The family's part: one alternative per family (the registry line of this
   // layer). Everything only one family has lives in its alternative (the
-  // *Description structs above: the geometry, the hybrid's gauge radius and
+  // *Description structs of the family headers: the geometry, the hybrid's gauge radius and
   // source errors, the 6-UPS's leg offsets), never among the common members
   // below; stewart()/hybrid()/rus6() reach the geometry,
   // *_description() the whole part.
