@@ -254,11 +254,11 @@ void each_effect_is_named_and_compensated(const Measurement& m) {
     e.compliance = {2e-8, 3e-8, 2.5e-8, 2e-8, 3e-8, 2.5e-8};
     cases.push_back({"gravity compliance", e, "absorbed:compliance"});
     // The same payload on gearboxes 30× softer (1.1–1.7 kN·m/rad, a small
-    // harmonic drive): 16 µm of deflection that the geometry cannot take
-    // in. Now compliance must be named and compensated. (Between the two,
+    // harmonic drive): the base model leaves 16 µm of the deflection (held
+    // out). Now compliance must be named and compensated. (Between the two,
     // 200–500 N on the stiff gearboxes, base RMS 2.4–5.4 µm: named both
     // ways, compensated to 0.99–1.28× the floor — backward elimination
-    // holds the weakest k_i at 0 there; printed in the #33 note.)
+    // holds the weakest k_i at 0 there; docs/diagnosis.md.)
     ind::Rus6Effects soft = e;
     for (double& k : soft.compliance) k *= 30;
     cases.push_back({"gravity compliance, soft gearboxes", soft, "compliance"});
