@@ -469,6 +469,9 @@ class DiagnosisRun {
   // Per node: the tool-point and joint residuals before (base model) and
   // after (final model); the final residual's sum of squares and length.
   std::vector<NodeTwist> before, after;
+  // Every node's M measures the whole twist (full poses, the gauge, three
+  // targets): the per-joint picture and the covariate slope test need it.
+  bool whole_twists = true;
   std::vector<double> node_ss;
   std::vector<Index> node_len;
   double excess_total = 0;
@@ -958,7 +961,7 @@ void DiagnosisRun::judge() {
     structure = true;
   }
   const bool trusted = noise_known && d.noise_trusted;
-  if (trusted && std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
+  if (trusted && whole_twists) {
     for (int j = 0; j < 6; ++j) {
       const JointFinding f = joint_finding(j);
       if (f.p < options.alpha / 6.0) {
@@ -1038,6 +1041,7 @@ void DiagnosisRun::residual_per_node() {
     }
     d.nodes.push_back(nr);
   }
+  whole_twists = std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; });
 }
 
 // Groups: per layer, per joint, per region, per covariate (final residual).
@@ -1163,7 +1167,7 @@ DiagnosisRun::JointFinding DiagnosisRun::joint_finding(int j) const {
 }
 
 void DiagnosisRun::by_joint() {
-  if (!std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; })) {
+  if (!whole_twists) {
     d.notes.push_back("fewer than three targets do not measure each node's whole pose: no per-joint residual map");
     return;
   }
@@ -1244,9 +1248,8 @@ void DiagnosisRun::by_covariate() {
   // expanding, q4 for motor 2's worn gear (IndependentRus6, one target):
   // one point's displacement follows many covariates a little. The groups'
   // RMS are still reported.
-  const bool whole = std::all_of(after.begin(), after.end(), [](const NodeTwist& t) { return t.whole; });
   double tp_var = 0;
-  if (sigma_mm > 0 && whole) {
+  if (sigma_mm > 0 && whole_twists) {
     for (const NodeData& n : base.nodes) {
       const MatrixXd MtM = n.M.transpose() * n.M;
       tp_var += Mat6<double>(MtM).inverse().topLeftCorner<3, 3>().trace() / 3.0;
@@ -1276,7 +1279,7 @@ void DiagnosisRun::by_covariate() {
     g.rms_um = std::sqrt(explained_ss / double(c.value.size())) * kMicro;
     g.ratio = d.noise_um > 0 ? g.rms_um / d.noise_um : 0.0;
     d.by_covariate.push_back(g);
-    if (sigma_mm > 0 && whole) {
+    if (sigma_mm > 0 && whole_twists) {
       const double chi2 = explained_ss / tp_var;
       const double p = chi2_upper_tail(chi2, 3.0);
       if (p < best_p) best_p = p, best_name = c.name, best_group = g;
