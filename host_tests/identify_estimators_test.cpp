@@ -671,6 +671,20 @@ TEST(identifyEstimators, MeanLeverageIsThePredictionVarianceOfHeldOutRows) {
     for (int k = 0; k < draws; ++k) sum += (St * svd.solve(gaussian(n, rng))).squaredNorm();
     const double monte_carlo = sum / draws / double(nt);
     EXPECT_NEAR(ls.mean_leverage(Xt), monte_carlo, 0.05 * monte_carlo) << "trial " << trial;
+    // And exactly: the rows through the SVD's pseudo-inverse (mean_leverage
+    // reads it off the decomposition's triangular factor instead).
+    const MatrixXd pinv = svd.matrixV().leftCols(svd.rank()) *
+                          svd.singularValues().head(svd.rank()).cwiseInverse().asDiagonal() *
+                          svd.matrixU().leftCols(svd.rank()).transpose();
+    const double exact = (St * pinv).squaredNorm() / double(nt);
+    EXPECT_NEAR(ls.mean_leverage(Xt), exact, 1e-9 * exact) << "trial " << trial;
+    // The held-out residual's χ² in the metric of its covariance (Chow's
+    // predictive test), against the dense (I + S_t·S⁺·S⁺ᵀ·S_tᵀ)⁻¹ by LU.
+    const VectorXd rt = gaussian(nt, rng);
+    const MatrixXd cov = MatrixXd::Identity(nt, nt) + (St * pinv) * (St * pinv).transpose();
+    const double chi2 = rt.dot(cov.partialPivLu().solve(rt));
+    EXPECT_NEAR(ls.prediction_chi2(Xt, rt), chi2, 1e-9 * chi2) << "trial " << trial;
+    EXPECT_LT(ls.prediction_chi2(Xt, rt), rt.squaredNorm());  // the prediction's spread discounts it
     EXPECT_GT(ls.mean_leverage(Xt), double(ls.rank()) / double(n));  // extrapolated rows weigh more
   }
 }

@@ -28,8 +28,17 @@ class ScaledLeastSquares {
   // over σ² (δ̂ = solve(y), y of noise σ) averaged over the rows — what the
   // estimate's spread adds to a held-out residual's variance, σ²(1 + h).
   double mean_leverage(const Eigen::MatrixXd& Xt) const;
+  // Held-out rows Xt and their residual rt = y_t − Xt·δ̂: rtᵀ·(I + Xt·C·Xtᵀ)⁻¹·rt,
+  // C·σ² the estimate's covariance — the residual's squared norm in the
+  // metric of its own covariance over σ², χ²(rows) under a complete model
+  // with noise σ (Chow's predictive test; with mean_leverage's (1 + h) alone
+  // a few far-extrapolated rows make the sum's tail heavier than χ²'s).
+  double prediction_chi2(const Eigen::MatrixXd& Xt, const Eigen::VectorXd& rt) const;
 
  private:
+  // T⁻ᵀ·(Z·Pᵀ·S_tᵀ)₁..ᵣ for the column-scaled held-out rows S_t: its
+  // columns' squared norms are the rows' leverages, and Bᵀ·B = S_t·S⁺·S⁺ᵀ·S_tᵀ.
+  Eigen::MatrixXd held_out_factor(const Eigen::MatrixXd& Xt) const;
   Eigen::VectorXd scale_;
   Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod_;
 };

@@ -148,6 +148,11 @@ struct Diagnosis {
   // neighbours (noise_estimate.hpp): its name ("" without one), Spearman's ρ, p.
   std::string structure_covariate;
   double structure_covariate_rho = 0, structure_covariate_p = 1;
+  // The final model's held-out rows against its cal rows, σ-free (Chow's
+  // predictive test): the ratio of their mean squares (the held-out ones in
+  // the metric of the prediction's covariance) and its F p-value; p < alpha
+  // is structure, as above (0 / 1: no held-out rows).
+  double held_out_ratio = 0, held_out_p = 1;
   // The held-out rows' mean leverage under the base model (their residual's
   // variance is σ²(1 + h) for a complete model; the verdict allows that).
   double test_leverage = 0;
