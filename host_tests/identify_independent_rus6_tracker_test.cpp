@@ -20,7 +20,6 @@
 // coordinate), and at least 50 times below the uncompensated one.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -167,11 +166,12 @@ TEST(IndependentRus6Tracker, OneTargetNodePictureIsTheTargetsDisplacement) {
 
 // The verdict's σ-free held-out-against-cal test (diagnosis.cpp judge;
 // docs/diagnosis.md "Structure forbids `explained`"): under a complete model
-// the ratio of the held-out mean square over (1 + leverage) to the cal mean
-// square per degree of freedom is F(n_test, n_cal − p), so it averages ~1 and
-// falls below α = 0.01 about once in a hundred. Checked where the leverage
-// matters most, one target in the tracker's frame (held-out leverage ~0.4:
-// without the (1 + h) the ratio would average ~1.4): 30 fresh noise draws
+// the ratio of the held-out mean square, in the metric of the prediction's
+// covariance, to the cal mean square per degree of freedom is
+// F(n_test, n_cal − p), so it averages ~1 and falls below α = 0.01 about once
+// in a hundred. Checked where the prediction's spread matters most, one
+// target in the tracker's frame (held-out leverage ~0.4: without it the
+// ratio would average ~1.4): 30 fresh noise draws
 // of the independent simulator on one machine whose true model kincal has
 // (other target, tracker, poses and role pattern than the tests above: 90
 // random poses, every fourth held out, 3 µm noise, the noise estimated).

@@ -983,12 +983,15 @@ void DiagnosisRun::judge() {
   // worn gear segment on one motor of the 6-RUS from one tracker target,
   // 3 mrad: the estimate 4.28 µm for 2, the cal residual after `cyclic`
   // 2.1 µm, the held-out one 5.2 µm, and the verdict read `explained`).
-  if (current.r_test.size() > 0 && n_cal > current.rank) {
+  // One factorisation of the final cal design; with no effect accepted it is
+  // the base design's, which the verdict's leverage below takes too.
+  std::optional<detail::ScaledLeastSquares> final_design;
+  if (test.y.size() > 0) final_design.emplace(design(cal, accepted));
+  if (final_design && current.r_test.size() > 0 && n_cal > current.rank) {
     const double nt = double(current.r_test.size()), dof = double(n_cal - current.rank);
     const double cal_ms = current.r_cal.squaredNorm() / dof;
     if (cal_ms > 0) {
-      const double chi2 = detail::ScaledLeastSquares(design(cal, accepted))
-                              .prediction_chi2(design(test, accepted), current.r_test);
+      const double chi2 = final_design->prediction_chi2(design(test, accepted), current.r_test);
       d.held_out_ratio = chi2 / nt / cal_ms;
       d.held_out_p = f_distribution_upper_tail(d.held_out_ratio, nt, dof);
       if (d.held_out_p < options.alpha) {
@@ -1010,7 +1013,9 @@ void DiagnosisRun::judge() {
   // the allowance with its own spread (a spurious effect, poorly determined,
   // would otherwise loosen the test that judges it).
   const double test_leverage =
-      test.y.size() > 0 ? detail::ScaledLeastSquares(design(cal, {})).mean_leverage(design(test, {})) : 0.0;
+      test.y.size() == 0 ? 0.0
+      : accepted.empty() ? final_design->mean_leverage(design(test, {}))
+                         : detail::ScaledLeastSquares(design(cal, {})).mean_leverage(design(test, {}));
   d.test_leverage = test_leverage;
   auto held_out_at_noise = [&](const FitResult& f) {
     if (f.r_test.size() == 0) return consistent(f);

@@ -18,8 +18,6 @@ ScaledLeastSquares::ScaledLeastSquares(const MatrixXd& X) : scale_(column_scales
 
 VectorXd ScaledLeastSquares::solve(const VectorXd& y) const { return scale_.cwiseInverse().asDiagonal() * cod_.solve(y); }
 
-// Σ_t ‖x_tᵀ·X⁺‖² / rows = ‖Xt·D⁻¹·S⁺‖²_F / rows, S = X·D⁻¹ (X⁺ = D⁻¹·S⁺ at
-// the solve's rank).
 MatrixXd ScaledLeastSquares::held_out_factor(const MatrixXd& Xt) const {
   const Index r = cod_.rank();
   // x_tᵀ·S⁺ without forming the n-wide pseudo-inverse (applying Q to an
@@ -32,6 +30,8 @@ MatrixXd ScaledLeastSquares::held_out_factor(const MatrixXd& Xt) const {
   return c.topRows(r);
 }
 
+// Σ_t ‖x_tᵀ·X⁺‖² / rows = ‖Xt·D⁻¹·S⁺‖²_F / rows, S = X·D⁻¹ (X⁺ = D⁻¹·S⁺ at
+// the solve's rank).
 double ScaledLeastSquares::mean_leverage(const MatrixXd& Xt) const {
   if (Xt.rows() == 0 || cod_.rank() == 0) return 0.0;
   return held_out_factor(Xt).squaredNorm() / double(Xt.rows());
